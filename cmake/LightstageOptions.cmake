@@ -1,0 +1,31 @@
+# Build switches. Hardware backends default to AUTO: built when the library is
+# found, skipped (with a message) when not, so a machine without any of them builds.
+set(LIGHTSTAGE_BACKEND_CHOICES AUTO ON OFF)
+foreach(backend GPIOD LIBCAMERA LIBUSB V4L2)
+  set(LIGHTSTAGE_WITH_${backend} AUTO CACHE STRING "Build the ${backend} backend (AUTO, ON, OFF)")
+  set_property(CACHE LIGHTSTAGE_WITH_${backend} PROPERTY STRINGS ${LIGHTSTAGE_BACKEND_CHOICES})
+endforeach()
+
+option(LIGHTSTAGE_BUILD_TESTS "Build the tests" ON)
+option(LIGHTSTAGE_BUILD_BENCHMARKS "Build the benchmarks" ON)
+option(LIGHTSTAGE_SANITIZE "Build with AddressSanitizer and UndefinedBehaviorSanitizer" OFF)
+option(LIGHTSTAGE_FUZZ "Build libFuzzer targets (needs clang)" OFF)
+option(LIGHTSTAGE_WERROR "Treat warnings as errors" ON)
+
+set(LIGHTSTAGE_WARNINGS -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Wold-style-cast
+    -Wcast-align -Woverloaded-virtual -Wnull-dereference -Wimplicit-fallthrough)
+if(LIGHTSTAGE_WERROR)
+  list(APPEND LIGHTSTAGE_WARNINGS -Werror)
+endif()
+
+if(LIGHTSTAGE_SANITIZE)
+  add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+if(LIGHTSTAGE_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID MATCHES "Clang")
+    message(FATAL_ERROR "LIGHTSTAGE_FUZZ needs clang (CXX=clang++)")
+  endif()
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=address,undefined)
+endif()

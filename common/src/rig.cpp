@@ -1,0 +1,356 @@
+#include "lightstage/common/rig.hpp"
+
+#include "lightstage/common/error.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace lightstage {
+namespace {
+
+// A YAML node together with where it came from, so that every error can name
+// the file, the line and the field's path ("leds[3].position_mm").
+class Field {
+ public:
+  Field(YAML::Node node, std::string source, std::string path)
+      : node_(std::move(node)), source_(std::move(source)), path_(std::move(path)) {}
+
+  [[noreturn]] void error(const std::string& what) const {
+    const int line = node_.Mark().line >= 0 ? node_.Mark().line + 1 : 0;
+    if (line > 0) fail("{}:{}: field '{}': {}", source_, line, path_, what);
+    fail("{}: field '{}': {}", source_, path_, what);
+  }
+
+  bool has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
+
+  Field operator[](const std::string& key) const {
+    if (!node_.IsMap()) error("expected a mapping");
+    YAML::Node child = node_[key];
+    if (!child.IsDefined()) error("missing key '" + key + "'");
+    return Field(child, source_, path_.empty() ? key : path_ + "." + key);
+  }
+
+  Field at(std::size_t i) const {
+    return Field(node_[i], source_, path_ + "[" + std::to_string(i) + "]");
+  }
+
+  std::size_t size() const {
+    if (!node_.IsSequence()) error("expected a list");
+    return node_.size();
+  }
+
+  // Rejects keys outside `allowed`: a misspelt limit must not be silently ignored.
+  void only_keys(std::initializer_list<const char*> allowed) const {
+    if (!node_.IsMap()) error("expected a mapping");
+    std::set<std::string> known(allowed.begin(), allowed.end());
+    for (const auto& kv : node_) {
+      const auto key = kv.first.as<std::string>();
+      if (!known.contains(key)) {
+        Field(kv.first, source_, path_.empty() ? key : path_ + "." + key).error("unknown key");
+      }
+    }
+  }
+
+  template <typename T>
+  T as() const {
+    if (!node_.IsScalar()) error("expected a value");
+    try {
+      return node_.as<T>();
+    } catch (const YAML::Exception&) {
+      error("cannot read '" + node_.Scalar() + "' as " + type_name<T>());
+    }
+  }
+
+  double number() const {
+    const auto value = as<double>();
+    if (!std::isfinite(value)) error("must be a finite number");
+    return value;
+  }
+  double positive() const {
+    const double value = number();
+    if (value <= 0) error("must be positive, got " + node_.Scalar());
+    return value;
+  }
+  int integer() const { return as<int>(); }
+
+  Vec3 vec3() const {
+    if (!node_.IsSequence() || node_.size() != 3) error("expected [x, y, z]");
+    return {at(0).number(), at(1).number(), at(2).number()};
+  }
+
+  LineRef line() const {
+    LineRef ref;
+    if (node_.IsMap()) {
+      only_keys({"line", "active_low"});
+      ref = (*this)["line"].line();
+      if (has("active_low")) ref.active_low = (*this)["active_low"].as<bool>();
+      return ref;
+    }
+    const auto text = as<std::string>();
+    char* end = nullptr;
+    const long offset = std::strtol(text.c_str(), &end, 10);
+    if (!text.empty() && end && *end == '\0') {
+      if (offset < 0 || offset > 4095) error("line offset out of range: " + text);
+      ref.offset = static_cast<int>(offset);
+    } else {
+      ref.name = text;
+    }
+    return ref;
+  }
+
+  const std::string& path() const { return path_; }
+
+ private:
+  template <typename T>
+  static const char* type_name() {
+    if constexpr (std::is_same_v<T, bool>) return "true/false";
+    if constexpr (std::is_integral_v<T>) return "an integer";
+    if constexpr (std::is_floating_point_v<T>) return "a number";
+    return "text";
+  }
+
+  YAML::Node node_;
+  std::string source_;
+  std::string path_;
+};
+
+LedLimits parse_limits(const Field& f, LedLimits limits) {
+  f.only_keys({"max_on_us", "max_duty", "duty_window_us"});
+  if (f.has("max_on_us")) limits.max_on_us = f["max_on_us"].positive();
+  if (f.has("max_duty")) {
+    limits.max_duty = f["max_duty"].positive();
+    if (limits.max_duty > 1) f["max_duty"].error("must be in (0, 1]");
+  }
+  if (f.has("duty_window_us")) limits.duty_window_us = f["duty_window_us"].positive();
+  return limits;
+}
+
+CameraDefaults parse_camera(const Field& f) {
+  f.only_keys({"model", "width", "height", "pixel_pitch_mm", "focal_px", "position_mm",
+               "exposure_us", "gain", "bit_depth", "uri"});
+  CameraDefaults cam;
+  if (f.has("model")) {
+    const auto model = f["model"].as<std::string>();
+    if (model == "orthographic") {
+      cam.model = CameraModel::kOrthographic;
+    } else if (model == "pinhole") {
+      cam.model = CameraModel::kPinhole;
+    } else {
+      f["model"].error("must be 'orthographic' or 'pinhole', got '" + model + "'");
+    }
+  }
+  cam.width = f["width"].integer();
+  cam.height = f["height"].integer();
+  if (cam.width <= 0 || cam.width > 16384) f["width"].error("must be in 1..16384");
+  if (cam.height <= 0 || cam.height > 16384) f["height"].error("must be in 1..16384");
+  if (f.has("pixel_pitch_mm")) cam.pixel_pitch_mm = f["pixel_pitch_mm"].positive();
+  if (f.has("focal_px")) cam.focal_px = f["focal_px"].positive();
+  if (f.has("position_mm")) cam.position_mm = f["position_mm"].vec3();
+  if (cam.model == CameraModel::kPinhole && cam.focal_px <= 0) {
+    f.error("a pinhole camera needs focal_px");
+  }
+  if (f.has("exposure_us")) cam.exposure_us = f["exposure_us"].positive();
+  if (f.has("gain")) cam.gain = f["gain"].positive();
+  if (f.has("bit_depth")) {
+    cam.bit_depth = f["bit_depth"].integer();
+    if (cam.bit_depth < 8 || cam.bit_depth > 16) f["bit_depth"].error("must be in 8..16");
+  }
+  if (f.has("uri")) cam.uri = f["uri"].as<std::string>();
+  return cam;
+}
+
+ShiftRegisterChain parse_chain(const Field& f) {
+  f.only_keys({"name", "data", "clock", "latch", "output_enable", "length", "clock_period_us"});
+  ShiftRegisterChain chain;
+  chain.name = f["name"].as<std::string>();
+  chain.data = f["data"].line();
+  chain.clock = f["clock"].line();
+  chain.latch = f["latch"].line();
+  if (f.has("output_enable")) chain.output_enable = f["output_enable"].line();
+  chain.length = f["length"].integer();
+  if (chain.length <= 0 || chain.length > 4096) f["length"].error("must be in 1..4096");
+  if (f.has("clock_period_us")) chain.clock_period_us = f["clock_period_us"].positive();
+  return chain;
+}
+
+Led parse_led(const Field& f, const LedLimits& default_limits, const std::string& default_colour) {
+  f.only_keys({"id", "position_mm", "line", "chain", "bit", "colour", "wavelength_nm",
+               "relative_intensity", "limits"});
+  Led led;
+  led.id = f["id"].integer();
+  if (led.id < 0) f["id"].error("must not be negative");
+  led.position_mm = f["position_mm"].vec3();
+  if (f.has("line") == f.has("chain")) {
+    f.error("an LED is wired either to a 'line' or to a 'chain' bit, exactly one");
+  }
+  if (f.has("line")) {
+    led.wiring = DirectWiring{f["line"].line()};
+  } else {
+    led.wiring = ChainWiring{f["chain"].as<std::string>(), f["bit"].integer()};
+  }
+  led.colour = f.has("colour") ? f["colour"].as<std::string>() : default_colour;
+  if (f.has("wavelength_nm")) led.wavelength_nm = f["wavelength_nm"].positive();
+  if (f.has("relative_intensity")) led.relative_intensity = f["relative_intensity"].positive();
+  led.limits = f.has("limits") ? parse_limits(f["limits"], default_limits) : default_limits;
+  return led;
+}
+
+// Checks that span several fields: ids, wiring collisions, chain bits, limits.
+void check_rig(const Rig& rig, const Field& root) {
+  std::map<std::string, std::string> line_users;  // line key -> what uses it
+  auto claim = [&](const LineRef& line, const std::string& user, const Field& where) {
+    const std::string key = line.by_name() ? "name:" + line.name : "offset:" + std::to_string(line.offset);
+    const auto [it, fresh] = line_users.emplace(key, user);
+    if (!fresh) where.error(line.describe() + " is already used by " + it->second);
+  };
+  claim(rig.trigger.line, "the camera trigger", root["trigger"]);
+  if (rig.strobe) claim(rig.strobe->line, "the strobe input", root["strobe"]);
+  for (std::size_t i = 0; i < rig.chains.size(); ++i) {
+    const auto& c = rig.chains[i];
+    const Field where = root["chains"].at(i);
+    claim(c.data, "chain '" + c.name + "' data", where);
+    claim(c.clock, "chain '" + c.name + "' clock", where);
+    claim(c.latch, "chain '" + c.name + "' latch", where);
+    if (c.output_enable) claim(*c.output_enable, "chain '" + c.name + "' output enable", where);
+    for (std::size_t j = 0; j < i; ++j) {
+      if (rig.chains[j].name == c.name) where["name"].error("duplicate chain name '" + c.name + "'");
+    }
+  }
+  std::set<int> ids;
+  std::set<std::pair<std::string, int>> chain_bits;
+  for (std::size_t i = 0; i < rig.leds.size(); ++i) {
+    const Led& led = rig.leds[i];
+    const Field where = root["leds"].at(i);
+    if (!ids.insert(led.id).second) where["id"].error("duplicate LED id " + std::to_string(led.id));
+    if (led.limits.max_on_us <= 0) where.error("no max_on_us limit (set it here or in led_defaults.limits)");
+    if (led.limits.max_duty <= 0) where.error("no max_duty limit (set it here or in led_defaults.limits)");
+    if ((led.position_mm - rig.object_position_mm).norm() < 1e-6) {
+      where["position_mm"].error("LED sits on the object position");
+    }
+    if (const auto* direct = std::get_if<DirectWiring>(&led.wiring)) {
+      claim(direct->line, "LED " + std::to_string(led.id), where["line"]);
+    } else {
+      const auto& bit = std::get<ChainWiring>(led.wiring);
+      const ShiftRegisterChain* chain = rig.chain(bit.chain);
+      if (!chain) where["chain"].error("no chain named '" + bit.chain + "'");
+      if (bit.bit < 0 || bit.bit >= chain->length) {
+        where["bit"].error("bit " + std::to_string(bit.bit) + " outside chain '" + bit.chain +
+                           "' of length " + std::to_string(chain->length));
+      }
+      if (!chain_bits.emplace(bit.chain, bit.bit).second) {
+        where["bit"].error("bit " + std::to_string(bit.bit) + " of chain '" + bit.chain +
+                           "' is already used by another LED");
+      }
+    }
+  }
+}
+
+Rig parse_document(const YAML::Node& doc, const std::string& source) {
+  const Field root(doc, source, "");
+  if (!doc.IsMap()) root.error("a rig file is a YAML mapping");
+  root.only_keys({"name", "description", "dome_radius_mm", "object_position_mm", "camera", "trigger",
+                  "strobe", "chains", "led_defaults", "leds"});
+  Rig rig;
+  rig.source = source;
+  rig.name = root["name"].as<std::string>();
+  if (rig.name.empty()) root["name"].error("must not be empty");
+  if (root.has("description")) rig.description = root["description"].as<std::string>();
+  rig.dome_radius_mm = root["dome_radius_mm"].positive();
+  if (root.has("object_position_mm")) rig.object_position_mm = root["object_position_mm"].vec3();
+  rig.camera = parse_camera(root["camera"]);
+
+  const Field trigger = root["trigger"];
+  trigger.only_keys({"line", "active_low", "pulse_us"});
+  rig.trigger.line = trigger["line"].line();
+  if (trigger.has("active_low")) rig.trigger.line.active_low = trigger["active_low"].as<bool>();
+  if (trigger.has("pulse_us")) rig.trigger.pulse_us = trigger["pulse_us"].positive();
+
+  if (root.has("strobe")) {
+    const Field strobe = root["strobe"];
+    strobe.only_keys({"line", "active_low", "timeout_us"});
+    StrobeLine s;
+    s.line = strobe["line"].line();
+    if (strobe.has("active_low")) s.line.active_low = strobe["active_low"].as<bool>();
+    if (strobe.has("timeout_us")) s.timeout_us = strobe["timeout_us"].positive();
+    rig.strobe = s;
+  }
+
+  if (root.has("chains")) {
+    const Field chains = root["chains"];
+    for (std::size_t i = 0; i < chains.size(); ++i) rig.chains.push_back(parse_chain(chains.at(i)));
+  }
+
+  LedLimits default_limits;
+  std::string default_colour = "white";
+  if (root.has("led_defaults")) {
+    const Field defaults = root["led_defaults"];
+    defaults.only_keys({"limits", "colour"});
+    if (defaults.has("limits")) default_limits = parse_limits(defaults["limits"], default_limits);
+    if (defaults.has("colour")) default_colour = defaults["colour"].as<std::string>();
+  }
+
+  const Field leds = root["leds"];
+  if (leds.size() == 0) leds.error("a rig needs at least one LED");
+  for (std::size_t i = 0; i < leds.size(); ++i) {
+    rig.leds.push_back(parse_led(leds.at(i), default_limits, default_colour));
+  }
+  check_rig(rig, root);
+  return rig;
+}
+
+}  // namespace
+
+std::string LineRef::describe() const {
+  return by_name() ? "line \"" + name + "\"" : "line " + std::to_string(offset);
+}
+
+const Led& Rig::led(int id) const {
+  for (const auto& led : leds) {
+    if (led.id == id) return led;
+  }
+  fail("{}: no LED with id {}", source.string(), id);
+}
+
+const ShiftRegisterChain* Rig::chain(const std::string& chain_name) const {
+  for (const auto& c : chains) {
+    if (c.name == chain_name) return &c;
+  }
+  return nullptr;
+}
+
+Rig parse_rig(const std::string& yaml_text, const std::string& source) {
+  YAML::Node doc;
+  try {
+    doc = YAML::Load(yaml_text);
+  } catch (const YAML::ParserException& e) {
+    fail("{}:{}: not valid YAML: {}", source, e.mark.line + 1, e.msg);
+  }
+  return parse_document(doc, source);
+}
+
+Rig load_rig(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) fail("{}: cannot open rig file", path.string());
+  std::stringstream text;
+  text << in.rdbuf();
+  return parse_rig(text.str(), path.string());
+}
+
+std::filesystem::path rig_directory() {
+  if (const char* dir = std::getenv("LIGHTSTAGE_RIG_DIR")) return dir;
+  for (const std::filesystem::path& candidate :
+       {std::filesystem::path(LIGHTSTAGE_SOURCE_RIG_DIR), std::filesystem::path(LIGHTSTAGE_INSTALL_RIG_DIR)}) {
+    if (std::filesystem::exists(candidate / "sim-dome.yaml")) return candidate;
+  }
+  return LIGHTSTAGE_SOURCE_RIG_DIR;
+}
+
+std::filesystem::path default_rig_path() { return rig_directory() / "sim-dome.yaml"; }
+
+}  // namespace lightstage

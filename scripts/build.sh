@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Configures and builds one flavour of the tree.
+#   scripts/build.sh [release|sanitize|fuzz]   (default: release)
+# Build folders: build/ (release), build-sanitize/, build-fuzz/.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+flavour=${1:-release}
+case "$flavour" in
+  release)  dir=$root/build;          args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo) ;;
+  sanitize) dir=$root/build-sanitize; args=(-DCMAKE_BUILD_TYPE=Debug -DLIGHTSTAGE_SANITIZE=ON -DLIGHTSTAGE_BUILD_BENCHMARKS=OFF) ;;
+  fuzz)     dir=$root/build-fuzz;     args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIGHTSTAGE_FUZZ=ON
+                                          -DCMAKE_CXX_COMPILER=clang++ -DLIGHTSTAGE_BUILD_BENCHMARKS=OFF) ;;
+  *) echo "usage: $0 [release|sanitize|fuzz]" >&2; exit 2 ;;
+esac
+jobs=${LIGHTSTAGE_JOBS:-$(nproc)}
+cmake -S "$root" -B "$dir" -G Ninja "${args[@]}" >/dev/null
+cmake --build "$dir" -j "$jobs"

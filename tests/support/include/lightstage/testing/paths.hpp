@@ -1,0 +1,17 @@
+#pragma once
+// Where tests find the source tree, the shared real data and scratch space.
+
+#include <filesystem>
+
+namespace lightstage::testing {
+
+// The project's source directory (LIGHTSTAGE_SOURCE_DIR, set by CTest).
+std::filesystem::path source_dir();
+// ../shared/data beside the checkout; empty if it is not there.
+std::filesystem::path shared_data_dir();
+// A fresh, empty directory under the build tree, unique to the running test.
+std::filesystem::path scratch_dir();
+// The build directory's bin/ (the programs under test).
+std::filesystem::path bin_dir();
+
+}  // namespace lightstage::testing

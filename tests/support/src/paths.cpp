@@ -1,0 +1,35 @@
+#include "lightstage/testing/paths.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <string>
+
+namespace lightstage::testing {
+
+std::filesystem::path source_dir() {
+  if (const char* dir = std::getenv("LIGHTSTAGE_SOURCE_DIR")) return dir;
+  return LIGHTSTAGE_TEST_SOURCE_DIR;
+}
+
+std::filesystem::path shared_data_dir() {
+  if (const char* dir = std::getenv("LIGHTSTAGE_SHARED_DATA")) return dir;
+  const auto candidate = source_dir().parent_path() / "shared" / "data";
+  return std::filesystem::exists(candidate) ? candidate : std::filesystem::path();
+}
+
+std::filesystem::path scratch_dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "scratch";
+  for (char& c : name) {
+    if (c == '/') c = '_';
+  }
+  const auto dir = std::filesystem::path(LIGHTSTAGE_TEST_BINARY_DIR) / "scratch" / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::filesystem::path bin_dir() { return std::filesystem::path(LIGHTSTAGE_TEST_BINARY_DIR) / "bin"; }
+
+}  // namespace lightstage::testing
