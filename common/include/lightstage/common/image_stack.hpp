@@ -25,6 +25,8 @@ struct Frame {
   std::optional<Vec3> led_position_mm;     // when the light is a known near point
   double exposure_us = 0;                  // 0 when unknown
   double gain = 1.0;
+  double black_level = 0;                  // in the image's own units (DN), subtracted by radiometry
+  double saturation_level = 0;             // DN at and above which a pixel is clipped; 0 = type maximum
 };
 
 struct GroundTruth {
