@@ -36,9 +36,7 @@ class Field {
     return Field(child, source_, path_.empty() ? key : path_ + "." + key);
   }
 
-  Field at(std::size_t i) const {
-    return Field(node_[i], source_, path_ + "[" + std::to_string(i) + "]");
-  }
+  Field at(std::size_t i) const { return Field(node_[i], source_, path_ + "[" + std::to_string(i) + "]"); }
 
   std::size_t size() const {
     if (!node_.IsSequence()) error("expected a list");
@@ -132,8 +130,8 @@ LedLimits parse_limits(const Field& f, LedLimits limits) {
 }
 
 CameraDefaults parse_camera(const Field& f) {
-  f.only_keys({"model", "width", "height", "pixel_pitch_mm", "focal_px", "position_mm",
-               "exposure_us", "gain", "bit_depth", "uri"});
+  f.only_keys({"model", "width", "height", "pixel_pitch_mm", "focal_px", "position_mm", "exposure_us", "gain",
+               "bit_depth", "uri"});
   CameraDefaults cam;
   if (f.has("model")) {
     const auto model = f["model"].as<std::string>();
@@ -180,8 +178,8 @@ ShiftRegisterChain parse_chain(const Field& f) {
 }
 
 Led parse_led(const Field& f, const LedLimits& default_limits, const std::string& default_colour) {
-  f.only_keys({"id", "position_mm", "line", "chain", "bit", "colour", "wavelength_nm",
-               "relative_intensity", "limits"});
+  f.only_keys({"id", "position_mm", "line", "chain", "bit", "colour", "wavelength_nm", "relative_intensity",
+               "limits"});
   Led led;
   led.id = f["id"].integer();
   if (led.id < 0) f["id"].error("must not be negative");
@@ -344,8 +342,8 @@ Rig load_rig(const std::filesystem::path& path) {
 
 std::filesystem::path rig_directory() {
   if (const char* dir = std::getenv("LIGHTSTAGE_RIG_DIR")) return dir;
-  for (const std::filesystem::path& candidate :
-       {std::filesystem::path(LIGHTSTAGE_SOURCE_RIG_DIR), std::filesystem::path(LIGHTSTAGE_INSTALL_RIG_DIR)}) {
+  for (const std::filesystem::path& candidate : {std::filesystem::path(LIGHTSTAGE_SOURCE_RIG_DIR),
+                                                 std::filesystem::path(LIGHTSTAGE_INSTALL_RIG_DIR)}) {
     if (std::filesystem::exists(candidate / "sim-dome.yaml")) return candidate;
   }
   return LIGHTSTAGE_SOURCE_RIG_DIR;

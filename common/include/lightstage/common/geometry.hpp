@@ -31,8 +31,8 @@ inline double angle_between_deg(const Vec3& a, const Vec3& b) {
 // Unit direction from elevation (from the image plane, towards +z) and azimuth
 // (from +x towards +y), as in ALGORITHMS.md §2: n = [cosθ cosφ, cosθ sinφ, sinθ].
 inline Vec3 direction_from_elevation_azimuth(double elevation_rad, double azimuth_rad) {
-  return {std::cos(elevation_rad) * std::cos(azimuth_rad),
-          std::cos(elevation_rad) * std::sin(azimuth_rad), std::sin(elevation_rad)};
+  return {std::cos(elevation_rad) * std::cos(azimuth_rad), std::cos(elevation_rad) * std::sin(azimuth_rad),
+          std::sin(elevation_rad)};
 }
 
 // Half vector between a light direction and the viewer.

@@ -19,14 +19,14 @@ struct Frame {
   // The image as captured or rendered: CV_16UC1 / CV_16UC3 (BGR) / CV_8UC1 /
   // CV_8UC3, or CV_32FC1 / CV_32FC3 for already-linear float data.
   cv::Mat image;
-  Vec3 light_direction = Vec3::UnitZ();    // unit, object -> light (distant model)
-  Vec3 light_intensity = Vec3::Ones();     // per channel r, g, b
-  int led_id = -1;                         // -1 when not from a rig
-  std::optional<Vec3> led_position_mm;     // when the light is a known near point
-  double exposure_us = 0;                  // 0 when unknown
+  Vec3 light_direction = Vec3::UnitZ();  // unit, object -> light (distant model)
+  Vec3 light_intensity = Vec3::Ones();   // per channel r, g, b
+  int led_id = -1;                       // -1 when not from a rig
+  std::optional<Vec3> led_position_mm;   // when the light is a known near point
+  double exposure_us = 0;                // 0 when unknown
   double gain = 1.0;
-  double black_level = 0;                  // in the image's own units (DN), subtracted by radiometry
-  double saturation_level = 0;             // DN at and above which a pixel is clipped; 0 = type maximum
+  double black_level = 0;       // in the image's own units (DN), subtracted by radiometry
+  double saturation_level = 0;  // DN at and above which a pixel is clipped; 0 = type maximum
 };
 
 struct GroundTruth {

@@ -57,9 +57,9 @@ struct Led {
   int id = 0;
   Vec3 position_mm = Vec3::Zero();  // in the dome frame
   LedWiring wiring;
-  std::string colour = "white";       // "white", "red", ..., or "<N>nm"
+  std::string colour = "white";         // "white", "red", ..., or "<N>nm"
   std::optional<double> wavelength_nm;  // for narrow-band LEDs
-  double relative_intensity = 1.0;     // nominal; calibration measures the real one
+  double relative_intensity = 1.0;      // nominal; calibration measures the real one
   LedLimits limits;
 };
 
@@ -79,8 +79,8 @@ struct CameraDefaults {
   CameraModel model = CameraModel::kOrthographic;
   int width = 512;
   int height = 512;
-  double pixel_pitch_mm = 0.2;  // orthographic: millimetres per pixel at the object
-  double focal_px = 0;          // pinhole: focal length in pixels
+  double pixel_pitch_mm = 0.2;          // orthographic: millimetres per pixel at the object
+  double focal_px = 0;                  // pinhole: focal length in pixels
   Vec3 position_mm = Vec3(0, 0, 1000);  // pinhole centre in the dome frame
   double exposure_us = 10'000;
   double gain = 1.0;
@@ -104,9 +104,7 @@ struct Rig {
   const ShiftRegisterChain* chain(const std::string& name) const;
 
   // Unit direction from the object to the LED (the distant-light approximation).
-  Vec3 light_direction(const Led& led) const {
-    return (led.position_mm - object_position_mm).normalized();
-  }
+  Vec3 light_direction(const Led& led) const { return (led.position_mm - object_position_mm).normalized(); }
 };
 
 // Parses a rig file. Errors name the file, the line and the field.
