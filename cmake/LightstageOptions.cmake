@@ -13,7 +13,7 @@ option(LIGHTSTAGE_FUZZ "Build libFuzzer targets (needs clang)" OFF)
 option(LIGHTSTAGE_WERROR "Treat warnings as errors" ON)
 
 set(LIGHTSTAGE_WARNINGS -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Wold-style-cast
-    -Wcast-align -Woverloaded-virtual -Wnull-dereference -Wimplicit-fallthrough)
+    -Wcast-align -Woverloaded-virtual -Wimplicit-fallthrough)
 if(LIGHTSTAGE_WERROR)
   list(APPEND LIGHTSTAGE_WARNINGS -Werror)
 endif()
