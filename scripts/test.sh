@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# The whole test suite, from a fresh machine: installs what is missing, then
+#   1. builds the release tree and runs every test (unit, integration, e2e),
+#   2. builds with AddressSanitizer + UndefinedBehaviorSanitizer and runs them again,
+#   3. builds the libFuzzer targets with clang and runs each one briefly on its corpus.
+# Set LIGHTSTAGE_TEST_FLAVOURS="release" (or "release sanitize") to run fewer.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+"$root/scripts/install-deps.sh"
+
+flavours=${LIGHTSTAGE_TEST_FLAVOURS:-release sanitize fuzz}
+jobs=${LIGHTSTAGE_JOBS:-$(nproc)}
+passed=0
+failed=0
+for flavour in $flavours; do
+  echo "=== $flavour: build ==="
+  "$root/scripts/build.sh" "$flavour"
+  case "$flavour" in
+    release) dir=$root/build ;;
+    sanitize) dir=$root/build-sanitize ;;
+    fuzz) dir=$root/build-fuzz ;;
+  esac
+  echo "=== $flavour: test ==="
+  log=$dir/ctest.log
+  set +e
+  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    ctest --test-dir "$dir" --output-on-failure -j "$jobs" --timeout 900 2>&1 | tee "$log"
+  set -e
+  summary=$(grep -E "tests passed, [0-9]+ tests failed out of" "$log" | tail -1)
+  total=$(echo "$summary" | sed -E 's/.* out of ([0-9]+).*/\1/')
+  bad=$(echo "$summary" | sed -E 's/.* ([0-9]+) tests failed.*/\1/')
+  if [ -z "$summary" ]; then
+    echo "$flavour: ctest did not finish" >&2
+    failed=$((failed + 1))
+    continue
+  fi
+  passed=$((passed + total - bad))
+  failed=$((failed + bad))
+done
+echo
+echo "all flavours ($flavours):"
+echo "tests: $passed passed, $failed failed"
+[ "$failed" -eq 0 ]
