@@ -38,7 +38,7 @@ lightstage_optional_backend(LIBCAMERA LIBCAMERA_FOUND "libcamera")
 lightstage_optional_backend(LIBUSB LIBUSB_FOUND "libusb")
 lightstage_optional_backend(V4L2 HAVE_VIDEODEV2_H "V4L2")
 
-if(LIGHTSTAGE_BUILD_TESTS)
+if(LIGHTSTAGE_BUILD_TESTS OR LIGHTSTAGE_BUILD_BENCHMARKS)
   find_package(GTest REQUIRED)
   include(GoogleTest)
 endif()

@@ -8,7 +8,7 @@ flavour=${1:-release}
 case "$flavour" in
   release)  dir=$root/build;          args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo) ;;
   sanitize) dir=$root/build-sanitize; args=(-DCMAKE_BUILD_TYPE=Debug -DLIGHTSTAGE_SANITIZE=ON -DLIGHTSTAGE_BUILD_BENCHMARKS=OFF) ;;
-  fuzz)     dir=$root/build-fuzz;     args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIGHTSTAGE_FUZZ=ON
+  fuzz)     dir=$root/build-fuzz;     args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIGHTSTAGE_FUZZ=ON -DLIGHTSTAGE_BUILD_TESTS=OFF
                                           -DCMAKE_CXX_COMPILER=clang++ -DLIGHTSTAGE_BUILD_BENCHMARKS=OFF) ;;
   *) echo "usage: $0 [release|sanitize|fuzz]" >&2; exit 2 ;;
 esac

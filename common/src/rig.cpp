@@ -48,7 +48,8 @@ class Field {
     if (!node_.IsMap()) error("expected a mapping");
     std::set<std::string> known(allowed.begin(), allowed.end());
     for (const auto& kv : node_) {
-      const auto key = kv.first.as<std::string>();
+      if (!kv.first.IsScalar()) Field(kv.first, source_, path_).error("keys must be plain names");
+      const auto key = kv.first.Scalar();
       if (!known.contains(key)) {
         Field(kv.first, source_, path_.empty() ? key : path_ + "." + key).error("unknown key");
       }
@@ -323,13 +324,15 @@ const ShiftRegisterChain* Rig::chain(const std::string& chain_name) const {
 }
 
 Rig parse_rig(const std::string& yaml_text, const std::string& source) {
-  YAML::Node doc;
   try {
-    doc = YAML::Load(yaml_text);
+    return parse_document(YAML::Load(yaml_text), source);
   } catch (const YAML::ParserException& e) {
     fail("{}:{}: not valid YAML: {}", source, e.mark.line + 1, e.msg);
+  } catch (const YAML::Exception& e) {
+    // Field reports what it can name itself; anything yaml-cpp still throws is
+    // a structure we did not anticipate, reported with its position.
+    fail("{}:{}: {}", source, e.mark.line + 1, e.msg);
   }
-  return parse_document(doc, source);
 }
 
 Rig load_rig(const std::filesystem::path& path) {
