@@ -1,0 +1,10 @@
+#!/usr/bin/env bash
+# The main job, end to end on the simulated dome, from a fresh machine:
+# installs what is missing, builds, then `lightstage demo` simulates a capture
+# under the default dome, solves it and measures the error against ground truth.
+#   scripts/demo.sh [OUT_DIR]      (default: out/demo)
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+"$root/scripts/install-deps.sh"
+"$root/scripts/build.sh" release
+exec "$root/build/bin/lightstage" demo --out "${1:-$root/out/demo}"
