@@ -1,0 +1,81 @@
+#pragma once
+// The simulated world's front door: a rig + options → an image stack with one
+// frame per LED (rig order), the object mask and the ground truth. The host's
+// `demo` and the simulated camera both come through here.
+//
+// Radiometric convention (distant lights, identity response, no noise):
+//     (image - black_level) / 65535 / light_intensity = albedo · f · max(n·l, 0)
+// i.e. the shading at unit light (material.hpp), up to quantisation; with
+// near lights the right side also carries the 1/d² factor, normalised to 1 at
+// the object centre. light_intensity (all three channels equal) is
+//     relative_intensity · full_scale_fraction · (exposure/rig exposure)
+//       · (gain/rig gain) · saturation_level / 65535.
+
+#include "lightstage/common/image_stack.hpp"
+#include "lightstage/common/rig.hpp"
+#include "lightstage/sim/renderer.hpp"
+#include "lightstage/sim/scene_file.hpp"
+#include "lightstage/sim/sensor.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace lightstage::sim {
+
+struct SimulateOptions {
+  std::string scene = "sphere";  // preset name or path to a scene YAML file
+  std::string material;          // material preset string; empty = the scene's own
+  LightModel light_model = LightModel::kNear;
+  std::optional<int> width, height;  // override the rig camera's (keeping its field of view)
+  SensorOptions sensor;
+  std::uint64_t seed = 1;               // noise seed; frame i draws from (seed, i)
+  int threads = 0;                      // 0 = hardware concurrency
+  std::optional<bool> cast_shadows;     // override the scene's
+  std::optional<double> led_radius_mm;  // override the scene's (mirror highlights)
+
+  void check() const;
+};
+
+// A resolved world: scene, camera, renderer and sensor for one rig. Rendering
+// one frame for any set of LEDs (the simulated camera's use) or the stack.
+class World {
+ public:
+  World(const Rig& rig, const SimulateOptions& options);
+
+  // Shading (CV_64FC1) with the given rig LEDs on; weight = fraction of the
+  // exposure each was on (multiplied by its relative_intensity).
+  cv::Mat render(const std::vector<std::pair<std::size_t, double>>& leds_on) const;
+  // The frame for rig LED `index` alone, exposed with noise drawn from (seed, index).
+  Frame frame(std::size_t index) const;
+
+  const Scene& scene() const { return scene_; }
+  const Sensor& sensor() const { return sensor_; }
+  const Renderer& renderer() const { return renderer_; }
+  const Rig& rig() const { return rig_; }
+  nlohmann::json describe() const;
+
+ private:
+  Rig rig_;
+  SimulateOptions options_;
+  Scene scene_;
+  Sensor sensor_;
+  Renderer renderer_;
+};
+
+ImageStack simulate_stack(const Rig& rig, const SimulateOptions& options);
+
+// scene_presets() (names for --help) comes from scene_file.hpp.
+
+// A JSON description for the stack manifest: options as given...
+nlohmann::json describe(const SimulateOptions& options);
+// ...and resolved against a rig (camera, sensor, scene, material).
+nlohmann::json describe(const Rig& rig, const SimulateOptions& options);
+
+const char* light_model_name(LightModel model);
+LightModel parse_light_model(const std::string& text);  // "near" | "distant"
+
+}  // namespace lightstage::sim

@@ -1,0 +1,185 @@
+#include "lightstage/sim/material.hpp"
+
+#include "lightstage/common/error.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+namespace lightstage::sim {
+namespace {
+
+// Floor to a cell index without UB for huge or non-finite coordinates.
+std::int64_t cell(double x) {
+  const double f = std::floor(x);
+  if (!(f > -1e15 && f < 1e15)) return 0;
+  return static_cast<std::int64_t>(f);
+}
+
+const char* kind_name(AlbedoTexture::Kind kind) {
+  switch (kind) {
+    case AlbedoTexture::Kind::kConstant:
+      return "constant";
+    case AlbedoTexture::Kind::kChecker:
+      return "checker";
+    case AlbedoTexture::Kind::kPatches:
+      return "patches";
+    case AlbedoTexture::Kind::kNoise:
+      return "noise";
+  }
+  return "?";
+}
+
+}  // namespace
+
+double AlbedoTexture::eval(double x_mm, double y_mm) const {
+  switch (kind) {
+    case Kind::kConstant:
+      return a;
+    case Kind::kChecker: {
+      const auto i = cell(x_mm / period_mm) + cell(y_mm / period_mm);
+      return (i % 2 == 0) ? a : b;
+    }
+    case Kind::kPatches: {
+      const auto ix = static_cast<std::uint64_t>(cell(x_mm / period_mm));
+      const auto iy = static_cast<std::uint64_t>(cell(y_mm / period_mm));
+      return a + (b - a) * hash_unit(seed * 0x9e3779b97f4a7c15ULL + ix, iy);
+    }
+    case Kind::kNoise: {
+      // Six plane waves of random direction and phase around the wavelength.
+      constexpr int kWaves = 6;
+      double sum = 0;
+      for (int k = 0; k < kWaves; ++k) {
+        const auto key = static_cast<std::uint64_t>(k);
+        const double angle = 2 * kPi * hash_unit(seed, 3 * key);
+        const double wavelength = period_mm * (0.6 + 0.8 * hash_unit(seed, 3 * key + 1));
+        const double phase = 2 * kPi * hash_unit(seed, 3 * key + 2);
+        const double u = x_mm * std::cos(angle) + y_mm * std::sin(angle);
+        sum += std::sin(2 * kPi * u / wavelength + phase);
+      }
+      const double s = std::clamp(sum / std::sqrt(2.0 * kWaves), -1.0, 1.0);
+      return a + (b - a) * (0.5 + 0.5 * s);
+    }
+  }
+  return a;
+}
+
+void AlbedoTexture::check() const {
+  if (!(a >= 0 && std::isfinite(a))) fail("albedo: field 'a' must be a finite value >= 0, got {}", a);
+  if (!(b >= 0 && std::isfinite(b))) fail("albedo: field 'b' must be a finite value >= 0, got {}", b);
+  if (!(period_mm > 0 && std::isfinite(period_mm))) {
+    fail("albedo: field 'period_mm' must be positive, got {}", period_mm);
+  }
+}
+
+nlohmann::json AlbedoTexture::describe() const {
+  nlohmann::json j{{"type", kind_name(kind)}};
+  if (kind == Kind::kConstant) {
+    j["value"] = a;
+  } else {
+    j["values"] = {a, b};
+    j["period_mm"] = period_mm;
+    if (kind != Kind::kChecker) j["seed"] = seed;
+  }
+  return j;
+}
+
+double Material::shading(double x_mm, double y_mm, const Vec3& n, const Vec3& l, const Vec3& v) const {
+  const double cos_l = n.dot(l);
+  if (cos_l <= 0) return 0;
+  double f = 0;
+  if (diffuse && kd != 0) f += kd * albedo.eval(x_mm, y_mm) * diffuse->eval(n, l, v);
+  if (specular && ks != 0) f += ks * specular->eval(n, l, v);
+  return f * cos_l;
+}
+
+nlohmann::json Material::describe() const {
+  nlohmann::json j{{"preset", preset}, {"kd", kd}, {"ks", ks}, {"albedo", albedo.describe()}};
+  j["diffuse"] = diffuse ? diffuse->describe() : "none";
+  j["specular"] = specular ? specular->describe() : "none";
+  return j;
+}
+
+Material parse_material(const std::string& preset, const AlbedoTexture& albedo) {
+  const auto spec = parse_preset_string(preset, "material");
+  std::set<std::string> used;
+  auto get = [&](const std::string& key, double fallback) {
+    used.insert(key);
+    const auto it = spec.params.find(key);
+    return it == spec.params.end() ? fallback : it->second;
+  };
+  Material m;
+  m.preset = preset;
+  m.albedo = albedo;
+  const std::string& name = spec.name;
+  if (name == "lambert") {
+    m.kd = get("kd", 1.0);
+  } else if (name == "oren-nayar") {
+    m.diffuse = std::make_shared<OrenNayar>(get("sigma", 0.3));
+    m.kd = get("kd", 1.0);
+  } else if (name == "blinn-phong" || name == "cook-torrance" || name == "ward") {
+    m.ks = get("ks", 0.5);
+    m.kd = get("kd", 1.0 - m.ks);
+    if (name == "blinn-phong") {
+      m.specular = std::make_shared<BlinnPhong>(get("shininess", 50));
+    } else if (name == "cook-torrance") {
+      m.specular = std::make_shared<CookTorrance>(get("roughness", 0.3), get("f0", 0.5));
+    } else {
+      m.specular = std::make_shared<Ward>(get("alpha", 0.2));
+    }
+  } else if (name == "two-lobe-ct") {
+    // Fig. 2.8(a): k1 Lambert + k2 Cook–Torrance with m = 0.5.
+    m.kd = get("k1", 0.5);
+    m.ks = get("k2", 0.5);
+    m.specular = std::make_shared<CookTorrance>(get("roughness", 0.5), get("f0", 0.5));
+  } else if (name == "two-lobe-fabric") {
+    m.kd = 0;
+    m.diffuse = nullptr;
+    m.ks = 1;
+    m.specular = std::make_shared<FabricTwoLobe>(get("k1", 0.5), get("k2", 0.5));
+  } else if (name == "two-lobe-random") {
+    m.kd = 0;
+    m.diffuse = nullptr;
+    m.ks = 1;
+    const double seed = get("seed", 1);
+    if (!(seed >= 0 && seed < 9e15)) fail("material '{}': 'seed' must be a non-negative integer", preset);
+    m.specular =
+        std::make_shared<RandomTwoLobe>(get("k1", 0.5), get("k2", 0.5), static_cast<std::uint64_t>(seed));
+  } else if (name == "chrome" || name == "mirror") {
+    m.kd = 0;
+    m.diffuse = nullptr;
+    m.ks = get("reflectance", 1.0);
+    m.specular = std::make_shared<Mirror>();
+  } else {
+    fail(
+        "material '{}': unknown preset '{}' (known: lambert, oren-nayar, blinn-phong, cook-torrance, ward, "
+        "two-lobe-ct, two-lobe-fabric, two-lobe-random, chrome)",
+        preset, name);
+  }
+  if (spec.params.contains("albedo")) {
+    used.insert("albedo");
+    m.albedo = AlbedoTexture{};
+    m.albedo.a = m.albedo.b = spec.params.at("albedo");
+  }
+  for (const auto& [key, value] : spec.params) {
+    if (!used.contains(key)) fail("material '{}': unknown key '{}' for '{}'", preset, key, name);
+  }
+  if (!(m.kd >= 0)) fail("material '{}': 'kd' must not be negative, got {}", preset, m.kd);
+  if (!(m.ks >= 0)) fail("material '{}': 'ks' must not be negative, got {}", preset, m.ks);
+  m.albedo.check();
+  return m;
+}
+
+std::vector<std::string> material_presets() {
+  return {"lambert",
+          "oren-nayar:sigma=0.3",
+          "blinn-phong:shininess=50,ks=0.5",
+          "cook-torrance:roughness=0.3,ks=0.5,f0=0.5",
+          "ward:alpha=0.2,ks=0.5",
+          "two-lobe-ct:k1=0.5,k2=0.5",
+          "two-lobe-fabric:k1=0.5,k2=0.5",
+          "two-lobe-random:k1=0.5,k2=0.5",
+          "chrome"};
+}
+
+}  // namespace lightstage::sim

@@ -1,0 +1,375 @@
+#include "lightstage/sim/scene_file.hpp"
+
+#include "lightstage/common/error.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <utility>
+
+namespace lightstage::sim {
+namespace {
+
+// A YAML node with its file and field path, so errors say "file:line: field
+// 'object.radius_mm': ..." (the same style as common/src/rig.cpp).
+class Field {
+ public:
+  Field(YAML::Node node, std::string source, std::string path)
+      : node_(std::move(node)), source_(std::move(source)), path_(std::move(path)) {}
+
+  [[noreturn]] void error(const std::string& what) const {
+    const int line = node_.Mark().line >= 0 ? node_.Mark().line + 1 : 0;
+    if (line > 0) fail("{}:{}: field '{}': {}", source_, line, path_, what);
+    fail("{}: field '{}': {}", source_, path_, what);
+  }
+
+  bool has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
+  bool is_map() const { return node_.IsMap(); }
+  bool is_scalar() const { return node_.IsScalar(); }
+
+  Field operator[](const std::string& key) const {
+    if (!node_.IsMap()) error("expected a mapping");
+    YAML::Node child = node_[key];
+    if (!child.IsDefined()) error("missing key '" + key + "'");
+    return Field(child, source_, path_.empty() ? key : path_ + "." + key);
+  }
+
+  Field at(std::size_t i) const { return Field(node_[i], source_, path_ + "[" + std::to_string(i) + "]"); }
+
+  std::size_t size() const {
+    if (!node_.IsSequence()) error("expected a list");
+    return node_.size();
+  }
+
+  void only_keys(const std::set<std::string>& known) const {
+    if (!node_.IsMap()) error("expected a mapping");
+    for (const auto& kv : node_) {
+      const auto key = kv.first.Scalar();
+      if (!known.contains(key)) {
+        Field(kv.first, source_, path_.empty() ? key : path_ + "." + key).error("unknown key");
+      }
+    }
+  }
+
+  std::string text() const {
+    if (!node_.IsScalar()) error("expected a value");
+    return node_.Scalar();
+  }
+
+  double number() const {
+    if (!node_.IsScalar()) error("expected a number");
+    double value = 0;
+    try {
+      value = node_.as<double>();
+    } catch (const YAML::Exception&) {
+      error("cannot read '" + node_.Scalar() + "' as a number");
+    }
+    if (!std::isfinite(value)) error("must be a finite number");
+    return value;
+  }
+  double positive() const {
+    const double value = number();
+    if (value <= 0) error("must be positive, got " + node_.Scalar());
+    return value;
+  }
+  double non_negative() const {
+    const double value = number();
+    if (value < 0) error("must not be negative, got " + node_.Scalar());
+    return value;
+  }
+  int integer() const {
+    if (!node_.IsScalar()) error("expected an integer");
+    try {
+      return node_.as<int>();
+    } catch (const YAML::Exception&) {
+      error("cannot read '" + node_.Scalar() + "' as an integer");
+    }
+  }
+  bool boolean() const {
+    if (!node_.IsScalar()) error("expected true or false");
+    try {
+      return node_.as<bool>();
+    } catch (const YAML::Exception&) {
+      error("cannot read '" + node_.Scalar() + "' as true/false");
+    }
+  }
+  Vec2 vec2() const {
+    if (!node_.IsSequence() || node_.size() != 2) error("expected [x, y]");
+    return {at(0).number(), at(1).number()};
+  }
+  Vec3 vec3() const {
+    if (!node_.IsSequence() || node_.size() != 3) error("expected [x, y, z]");
+    return {at(0).number(), at(1).number(), at(2).number()};
+  }
+
+ private:
+  YAML::Node node_;
+  std::string source_;
+  std::string path_;
+};
+
+HeightField::Footprint parse_footprint(const Field& f, double* size_mm, double default_size) {
+  *size_mm = default_size;
+  if (!f.is_map()) f.error("expected {shape: square|disk|support, size_mm: ...}");
+  f.only_keys({"shape", "size_mm"});
+  HeightField::Footprint fp = HeightField::Footprint::kSquare;
+  if (f.has("shape")) {
+    const auto shape = f["shape"].text();
+    if (shape == "square") {
+      fp = HeightField::Footprint::kSquare;
+    } else if (shape == "disk") {
+      fp = HeightField::Footprint::kDisk;
+    } else if (shape == "support") {
+      fp = HeightField::Footprint::kSupport;
+    } else {
+      f["shape"].error("must be square, disk or support, got '" + shape + "'");
+    }
+  }
+  if (f.has("size_mm")) *size_mm = f["size_mm"].positive();
+  return fp;
+}
+
+std::shared_ptr<const Shape> parse_object(const Field& f) {
+  const auto type = f["type"].text();
+  // Each object type accepts its own keys; anything else is a misspelling.
+  auto make_field = [&](std::shared_ptr<const HeightFunction> function, HeightField::Footprint default_fp,
+                        double default_size) {
+    double size = default_size;
+    HeightField::Footprint fp = default_fp;
+    if (f.has("footprint")) fp = parse_footprint(f["footprint"], &size, default_size);
+    return std::make_shared<HeightField>(std::move(function), fp, size);
+  };
+  try {
+    if (type == "sphere") {
+      f.only_keys({"type", "radius_mm", "center_mm"});
+      const Vec3 center = f.has("center_mm") ? f["center_mm"].vec3() : Vec3::Zero();
+      return std::make_shared<Sphere>(center, f["radius_mm"].positive());
+    }
+    if (type == "bumps") {
+      f.only_keys({"type", "size_mm", "bumps", "footprint"});
+      const double size = f.has("size_mm") ? f["size_mm"].positive() : 90.0;
+      std::vector<GaussianBumps::Bump> bumps;
+      const Field list = f["bumps"];
+      for (std::size_t i = 0; i < list.size(); ++i) {
+        const Field b = list.at(i);
+        b.only_keys({"center_mm", "height_mm", "sigma_mm"});
+        bumps.push_back({b["center_mm"].vec2(), b["height_mm"].non_negative(), b["sigma_mm"].positive()});
+      }
+      return make_field(std::make_shared<GaussianBumps>(std::move(bumps), size / 2),
+                        HeightField::Footprint::kSquare, size);
+    }
+    if (type == "relief") {
+      f.only_keys({"type", "size_mm", "height_mm", "bevel_mm", "footprint"});
+      const double size = f.has("size_mm") ? f["size_mm"].positive() : 90.0;
+      const double height = f.has("height_mm") ? f["height_mm"].positive() : 3.0;
+      const double bevel = f.has("bevel_mm") ? f["bevel_mm"].positive() : 0.8;
+      return make_field(std::make_shared<Relief>(size, height, bevel), HeightField::Footprint::kSquare, size);
+    }
+    if (type == "blob") {
+      f.only_keys({"type", "size_mm", "footprint"});
+      const double size = f.has("size_mm") ? f["size_mm"].positive() : 90.0;
+      return make_field(std::make_shared<Blob>(size), HeightField::Footprint::kSupport, size);
+    }
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    if (what.find("field '") != std::string::npos) throw;
+    f.error(what);  // a constructor's check: name the object's position
+  }
+  f["type"].error("must be sphere, bumps, relief or blob, got '" + type + "'");
+}
+
+AlbedoTexture parse_albedo(const Field& f) {
+  AlbedoTexture t;
+  if (f.is_scalar()) {
+    t.a = t.b = f.non_negative();
+    return t;
+  }
+  f.only_keys({"type", "value", "values", "period_mm", "seed"});
+  const auto type = f["type"].text();
+  if (type == "constant") {
+    t.a = t.b = f["value"].non_negative();
+    return t;
+  }
+  if (type == "checker") {
+    t.kind = AlbedoTexture::Kind::kChecker;
+  } else if (type == "patches") {
+    t.kind = AlbedoTexture::Kind::kPatches;
+  } else if (type == "noise") {
+    t.kind = AlbedoTexture::Kind::kNoise;
+  } else {
+    f["type"].error("must be constant, checker, patches or noise, got '" + type + "'");
+  }
+  if (f.has("values")) {
+    const Field v = f["values"];
+    if (v.size() != 2) v.error("expected [low, high]");
+    t.a = v.at(0).non_negative();
+    t.b = v.at(1).non_negative();
+  } else {
+    t.a = 0.2;
+    t.b = 0.9;
+  }
+  if (f.has("period_mm")) t.period_mm = f["period_mm"].positive();
+  if (f.has("seed")) {
+    const int seed = f["seed"].integer();
+    if (seed < 0) f["seed"].error("must not be negative");
+    t.seed = static_cast<std::uint64_t>(seed);
+  }
+  return t;
+}
+
+CameraOverrides parse_camera(const Field& f) {
+  f.only_keys({"model", "width", "height", "pixel_pitch_mm", "focal_px", "position_mm"});
+  CameraOverrides c;
+  if (f.has("model")) {
+    const auto model = f["model"].text();
+    if (model == "orthographic") {
+      c.model = CameraModel::kOrthographic;
+    } else if (model == "pinhole") {
+      c.model = CameraModel::kPinhole;
+    } else {
+      f["model"].error("must be 'orthographic' or 'pinhole', got '" + model + "'");
+    }
+  }
+  if (f.has("width")) {
+    c.width = f["width"].integer();
+    if (*c.width <= 0 || *c.width > 16384) f["width"].error("must be in 1..16384");
+  }
+  if (f.has("height")) {
+    c.height = f["height"].integer();
+    if (*c.height <= 0 || *c.height > 16384) f["height"].error("must be in 1..16384");
+  }
+  if (f.has("pixel_pitch_mm")) c.pixel_pitch_mm = f["pixel_pitch_mm"].positive();
+  if (f.has("focal_px")) c.focal_px = f["focal_px"].positive();
+  if (f.has("position_mm")) c.position_mm = f["position_mm"].vec3();
+  return c;
+}
+
+Scene parse_document(const YAML::Node& doc, const std::string& source) {
+  const Field root(doc, source, "");
+  if (!doc.IsMap()) root.error("a scene file is a YAML mapping");
+  root.only_keys({"name", "object", "material", "albedo", "camera", "led_radius_mm", "led_radiance",
+                  "highlight_blur_px", "cast_shadows"});
+  Scene scene;
+  scene.name = root.has("name") ? root["name"].text() : source;
+  scene.shape = parse_object(root["object"]);
+  const AlbedoTexture albedo = root.has("albedo") ? parse_albedo(root["albedo"]) : AlbedoTexture{};
+  const std::string material = root.has("material") ? root["material"].text() : "lambert";
+  try {
+    scene.material = parse_material(material, albedo);
+  } catch (const InputError& e) {
+    root["material"].error(e.what());
+  }
+  if (root.has("camera")) scene.camera = parse_camera(root["camera"]);
+  if (root.has("led_radius_mm")) scene.led_radius_mm = root["led_radius_mm"].positive();
+  if (root.has("led_radiance")) scene.led_radiance = root["led_radiance"].non_negative();
+  if (root.has("highlight_blur_px")) scene.highlight_blur_px = root["highlight_blur_px"].non_negative();
+  if (root.has("cast_shadows")) scene.cast_shadows = root["cast_shadows"].boolean();
+  return scene;
+}
+
+// Sized for the default rig camera (512 px at 0.2 mm: a 102 mm field).
+const std::vector<std::pair<std::string, std::string>>& presets() {
+  static const std::vector<std::pair<std::string, std::string>> kPresets = {
+      {"sphere", R"(name: sphere
+object: {type: sphere, radius_mm: 40}
+material: lambert
+albedo: 1.0
+)"},
+      {"chrome-sphere", R"(name: chrome-sphere
+object: {type: sphere, radius_mm: 40}
+material: chrome
+)"},
+      {"matte-sphere", R"(name: matte-sphere
+object: {type: sphere, radius_mm: 40}
+material: lambert
+albedo: 0.5
+)"},
+      {"shiny-sphere", R"(name: shiny-sphere
+object: {type: sphere, radius_mm: 40}
+material: "cook-torrance:roughness=0.3,ks=0.5,f0=0.5"
+albedo: {type: patches, values: [0.3, 0.9], period_mm: 16, seed: 3}
+)"},
+      {"bumps", R"(name: bumps
+object:
+  type: bumps
+  size_mm: 96
+  bumps:
+    - {center_mm: [0, 0], height_mm: 12, sigma_mm: 10}
+    - {center_mm: [-25, 22], height_mm: 8, sigma_mm: 7}
+    - {center_mm: [26, 20], height_mm: 6, sigma_mm: 9}
+    - {center_mm: [-22, -26], height_mm: 10, sigma_mm: 6}
+    - {center_mm: [24, -24], height_mm: 5, sigma_mm: 12}
+    - {center_mm: [0, 34], height_mm: 4, sigma_mm: 4}
+    - {center_mm: [34, 0], height_mm: 7, sigma_mm: 5}
+material: lambert
+albedo: 0.8
+)"},
+      {"relief", R"(name: relief
+object: {type: relief, size_mm: 96, height_mm: 3, bevel_mm: 0.8}
+material: lambert
+albedo: 0.8
+)"},
+      {"bunny", R"(name: bunny
+object: {type: blob, size_mm: 96}
+material: lambert
+albedo: {type: noise, values: [0.55, 0.9], period_mm: 20, seed: 7}
+)"},
+  };
+  return kPresets;
+}
+
+}  // namespace
+
+Scene parse_scene(const std::string& yaml_text, const std::string& source) {
+  try {
+    return parse_document(YAML::Load(yaml_text), source);
+  } catch (const YAML::ParserException& e) {
+    fail("{}:{}: not valid YAML: {}", source, e.mark.line + 1, e.msg);
+  } catch (const YAML::Exception& e) {
+    fail("{}:{}: {}", source, e.mark.line + 1, e.msg);
+  }
+}
+
+Scene load_scene(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) fail("{}: cannot open scene file", path.string());
+  std::stringstream text;
+  text << in.rdbuf();
+  return parse_scene(text.str(), path.string());
+}
+
+std::vector<std::string> scene_presets() {
+  std::vector<std::string> names;
+  for (const auto& [name, yaml] : presets()) names.push_back(name);
+  return names;
+}
+
+std::string scene_preset_yaml(const std::string& name) {
+  for (const auto& [preset, yaml] : presets()) {
+    if (preset == name) return yaml;
+  }
+  std::string known;
+  for (const auto& n : scene_presets()) known += (known.empty() ? "" : ", ") + n;
+  fail("unknown scene preset '{}' (known: {}; or give a path to a scene .yaml file)", name, known);
+}
+
+Scene resolve_scene(const std::string& name_or_path) {
+  for (const auto& [preset, yaml] : presets()) {
+    if (preset == name_or_path) {
+      Scene scene = parse_scene(yaml, "preset " + preset);
+      scene.name = preset;
+      return scene;
+    }
+  }
+  if (name_or_path.find('/') != std::string::npos || name_or_path.ends_with(".yaml") ||
+      name_or_path.ends_with(".yml") || std::filesystem::exists(name_or_path)) {
+    return load_scene(name_or_path);
+  }
+  scene_preset_yaml(name_or_path);  // throws, listing the presets
+  fail("unknown scene '{}'", name_or_path);
+}
+
+}  // namespace lightstage::sim
