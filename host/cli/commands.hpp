@@ -1,0 +1,26 @@
+#pragma once
+// The `lightstage` subcommands, as a table: each entry adds one CLI11
+// subcommand (its options bound to a library Options struct) whose callback
+// is a thin call into the host library. main.cpp only walks the table.
+
+#include <CLI/CLI.hpp>
+
+#include <vector>
+
+namespace lightstage::cli {
+
+struct Command {
+  const char* name;
+  void (*add)(CLI::App& app);
+};
+
+const std::vector<Command>& commands();
+
+void add_demo(CLI::App& app);
+void add_simulate(CLI::App& app);
+void add_solve(CLI::App& app);
+void add_eval(CLI::App& app);
+void add_rig(CLI::App& app);
+void add_devices(CLI::App& app);
+
+}  // namespace lightstage::cli

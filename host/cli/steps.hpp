@@ -1,0 +1,37 @@
+#pragma once
+// The steps that commands share (demo = simulate + solve + eval), each one
+// library call plus its files, so that every command stays a thin wrapper.
+
+#include "lightstage/common/rig.hpp"
+#include "lightstage/host/eval/angular_error.hpp"
+#include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/solvers/lambertian.hpp"
+#include "lightstage/sim/simulate.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <optional>
+
+namespace lightstage::cli {
+
+// Simulates `rig` under `options` and writes the stack (with ground truth and
+// manifest) into `out`. Returns a JSON summary of what was written.
+nlohmann::json simulate_to_folder(const std::filesystem::path& rig_path, const sim::SimulateOptions& options,
+                                  const std::filesystem::path& out);
+
+struct SolveReport {
+  nlohmann::json summary;                  // as written to summary.json
+  std::optional<AngularErrorStats> error;  // when the stack holds ground truth
+};
+
+// Loads the stack in `input`, solves it with Lambertian least squares and
+// writes the results into `out`. When the stack holds ground truth, the
+// angular error is measured and recorded in summary.json too.
+SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOptions& radiometry,
+                         const L2Options& options, const std::filesystem::path& out);
+
+// Prints a one-line human summary of angular error statistics.
+void print_error_stats(const AngularErrorStats& stats);
+
+}  // namespace lightstage::cli
