@@ -1,0 +1,55 @@
+#pragma once
+// Stack folders on disk: the DiLiGenT layout plus our manifest.json. Every
+// file and every manifest key is described in docs/stack-format.md.
+//
+//   filenames.txt          image order, one file name per line (required)
+//   <images>               8/16-bit PNG (grey or RGB) or float PFM, same size and type
+//   light_directions.txt   "x y z" per image, object -> light (required)
+//   light_intensities.txt  "r g b" per image (optional: all 1)
+//   mask.png               object where the mask equals its maximum (optional: all pixels)
+//   Normal_gt.png          ground-truth normals, normal-map encoding (optional)
+//   depth_gt.pfm           ground-truth depth (optional)
+//   manifest.json          per-frame LED id, exposure, gain, levels + rig/scene (optional)
+
+#include "lightstage/common/image_stack.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+
+namespace lightstage::io {
+
+struct LoadOptions {
+  // Fewer listed images than this is an error (the Lambertian solver needs 3).
+  int min_images = 3;
+  // Read Normal_gt.png / depth_gt.pfm when present.
+  bool load_ground_truth = true;
+  // Read manifest.json when present (per-frame LED id, exposure, levels).
+  bool read_manifest = true;
+  // Threads decoding images; 0 = hardware concurrency.
+  int threads = 0;
+
+  // Throws InputError naming the broken field and value.
+  void check() const;
+};
+
+// Loads a stack folder. Light directions are normalised. Throws InputError,
+// one line naming the file (and line or field), for: a missing folder or
+// required file, a listed image that is missing or not an image, images of
+// different size or type, fewer than min_images images, direction or
+// intensity files with the wrong number of lines or malformed numbers, a
+// zero-length direction, a non-positive intensity, a mask, ground truth or
+// manifest that does not fit the images.
+ImageStack load_stack(const std::filesystem::path& dir, const LoadOptions& options = {});
+
+// Writes `stack` into `dir` (created if needed) in the same layout. Frames are
+// written in their own type (8/16-bit PNG, float PFM) under Frame::filename
+// (default "001.png", ... / "001.pfm"); the mask, Normal_gt.png and
+// depth_gt.pfm are written when present; manifest.json last. Keys of
+// `extra_manifest` (an object: rig, scene, sensor, ...) are added at the top
+// level; an "extra_manifest.frames" array of objects, one per frame, is merged
+// into the frame entries. Every file is written atomically.
+void write_stack(const std::filesystem::path& dir, const ImageStack& stack,
+                 const nlohmann::json& extra_manifest = nlohmann::json::object());
+
+}  // namespace lightstage::io

@@ -1,0 +1,106 @@
+#include "lightstage/host/eval/angular_error.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/common/geometry.hpp"
+#include "lightstage/host/io/mask.hpp"
+#include "lightstage/host/io/normal_map.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <system_error>
+#include <vector>
+
+namespace lightstage {
+namespace {
+
+bool present(const cv::Vec3f& n) {
+  return std::isfinite(n[0]) && std::isfinite(n[1]) && std::isfinite(n[2]) && n.dot(n) > 1e-12f;
+}
+
+// Linear interpolation between order statistics (numpy's default).
+double percentile(const std::vector<double>& sorted, double q) {
+  const double position = q * static_cast<double>(sorted.size() - 1);
+  const auto below = static_cast<std::size_t>(std::floor(position));
+  const std::size_t above = std::min(below + 1, sorted.size() - 1);
+  const double fraction = position - static_cast<double>(below);
+  return sorted[below] + (sorted[above] - sorted[below]) * fraction;
+}
+
+}  // namespace
+
+nlohmann::json AngularErrorStats::to_json() const {
+  return {{"mean_deg", mean}, {"median_deg", median}, {"p90_deg", p90},
+          {"max_deg", max},   {"count", count},       {"missing", missing}};
+}
+
+AngularErrorMap angular_error(const cv::Mat& predicted, const cv::Mat& truth, const cv::Mat& mask) {
+  if (predicted.type() != CV_32FC3 || truth.type() != CV_32FC3) {
+    fail("angular_error: normal maps must be CV_32FC3, got types {} and {}", predicted.type(), truth.type());
+  }
+  if (predicted.size() != truth.size()) {
+    fail("angular_error: predicted normals are {}x{}, ground truth is {}x{}", predicted.cols, predicted.rows,
+         truth.cols, truth.rows);
+  }
+  if (!mask.empty() && (mask.type() != CV_8UC1 || mask.size() != truth.size())) {
+    fail("angular_error: mask must be CV_8UC1 of {}x{}, got type {} of {}x{}", truth.cols, truth.rows,
+         mask.type(), mask.cols, mask.rows);
+  }
+  AngularErrorMap result;
+  result.degrees = cv::Mat(truth.size(), CV_32FC1, cv::Scalar::all(0));
+  result.valid = cv::Mat(truth.size(), CV_8UC1, cv::Scalar::all(0));
+  std::vector<double> errors;
+  double sum = 0;
+  for (int y = 0; y < truth.rows; ++y) {
+    for (int x = 0; x < truth.cols; ++x) {
+      if (!mask.empty() && mask.at<std::uint8_t>(y, x) == 0) continue;
+      const cv::Vec3f& t = truth.at<cv::Vec3f>(y, x);
+      if (!present(t)) continue;
+      const cv::Vec3f& p = predicted.at<cv::Vec3f>(y, x);
+      if (!present(p)) {
+        ++result.stats.missing;
+        continue;
+      }
+      const double angle = angle_between_deg(Vec3(p[0], p[1], p[2]), Vec3(t[0], t[1], t[2]));
+      result.degrees.at<float>(y, x) = static_cast<float>(angle);
+      result.valid.at<std::uint8_t>(y, x) = 255;
+      errors.push_back(angle);
+      sum += angle;
+    }
+  }
+  AngularErrorStats& stats = result.stats;
+  stats.count = errors.size();
+  if (!errors.empty()) {
+    std::sort(errors.begin(), errors.end());
+    stats.mean = sum / static_cast<double>(errors.size());
+    stats.median = percentile(errors, 0.5);
+    stats.p90 = percentile(errors, 0.9);
+    stats.max = errors.back();
+  }
+  return result;
+}
+
+AngularErrorStats evaluate_normal_map(const std::filesystem::path& predicted_png,
+                                      const std::filesystem::path& truth_dir) {
+  std::error_code error;
+  if (!std::filesystem::is_directory(truth_dir, error))
+    fail("{}: no such ground-truth folder", truth_dir.string());
+  const auto truth_path = truth_dir / "Normal_gt.png";
+  const auto mask_path = truth_dir / "mask.png";
+  const auto predicted = io::read_normal_map(predicted_png);
+  const auto truth = io::read_normal_map(truth_path);
+  if (predicted.normals.size() != truth.normals.size()) {
+    fail("{}: prediction is {}x{}, but {} is {}x{}", predicted_png.string(), predicted.normals.cols,
+         predicted.normals.rows, truth_path.string(), truth.normals.cols, truth.normals.rows);
+  }
+  cv::Mat mask;
+  if (std::filesystem::exists(mask_path, error)) {
+    mask = io::read_mask(mask_path);
+    if (mask.size() != truth.normals.size()) {
+      fail("{}: mask is {}x{}, but {} is {}x{}", mask_path.string(), mask.cols, mask.rows,
+           truth_path.string(), truth.normals.cols, truth.normals.rows);
+    }
+  }
+  return angular_error(predicted.normals, truth.normals, mask).stats;
+}
+
+}  // namespace lightstage

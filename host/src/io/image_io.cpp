@@ -1,0 +1,95 @@
+#include "lightstage/host/io/image_io.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/host/io/pfm.hpp"
+#include "util/atomic_file.hpp"
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <system_error>
+
+namespace lightstage::io {
+namespace {
+
+std::string lower_extension(const std::filesystem::path& path) {
+  auto extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension;
+}
+
+std::string describe_type(const cv::Mat& image) {
+  return fmt::format("{}-bit depth code {}, {} channel(s)", image.elemSize1() * 8, image.depth(),
+                     image.channels());
+}
+
+}  // namespace
+
+cv::Mat read_image(const std::filesystem::path& path) {
+  std::error_code error;
+  if (!std::filesystem::exists(path, error)) fail("{}: no such file", path.string());
+  if (!std::filesystem::is_regular_file(path, error)) fail("{}: not a regular file", path.string());
+  if (lower_extension(path) == ".pfm") return read_pfm(path);
+
+  cv::Mat image;
+  try {
+    image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    fail("{}: cannot decode image: {}", path.string(), e.what());
+  }
+  if (image.empty()) fail("{}: not a readable image (unknown format or corrupt file)", path.string());
+  if (image.depth() != CV_8U && image.depth() != CV_16U) {
+    fail("{}: unsupported pixel type ({}); expected 8- or 16-bit", path.string(), describe_type(image));
+  }
+  switch (image.channels()) {
+    case 1:
+    case 3:
+      return image;
+    case 2: {
+      cv::Mat grey;
+      cv::extractChannel(image, grey, 0);
+      return grey;
+    }
+    case 4: {
+      cv::Mat bgr;
+      cv::cvtColor(image, bgr, cv::COLOR_BGRA2BGR);
+      return bgr;
+    }
+    default:
+      fail("{}: unsupported channel count {}", path.string(), image.channels());
+  }
+}
+
+void write_png(const std::filesystem::path& path, const cv::Mat& image) {
+  if (image.empty()) fail("{}: cannot write an empty image", path.string());
+  if ((image.depth() != CV_8U && image.depth() != CV_16U) ||
+      (image.channels() != 1 && image.channels() != 3)) {
+    fail("{}: cannot write as PNG: {}; expected 8- or 16-bit with 1 or 3 channels", path.string(),
+         describe_type(image));
+  }
+  const auto temporary = util::temporary_sibling(path);
+  bool written = false;
+  try {
+    written = cv::imwrite(temporary.string(), image);
+  } catch (const cv::Exception&) {
+    written = false;
+  }
+  if (!written) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    fail("{}: cannot write PNG (is the folder there and writable?)", path.string());
+  }
+  util::commit_temporary(temporary, path);
+}
+
+void write_png16(const std::filesystem::path& path, const cv::Mat& image) {
+  if (image.depth() != CV_16U) {
+    fail("{}: expected a 16-bit image to write, got {}", path.string(), describe_type(image));
+  }
+  write_png(path, image);
+}
+
+}  // namespace lightstage::io

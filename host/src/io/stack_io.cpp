@@ -1,0 +1,218 @@
+#include "lightstage/host/io/stack_io.hpp"
+
+#include "io/stack_manifest.hpp"
+#include "io/text_table.hpp"
+#include "lightstage/common/error.hpp"
+#include "lightstage/host/io/image_io.hpp"
+#include "lightstage/host/io/mask.hpp"
+#include "lightstage/host/io/normal_map.hpp"
+#include "lightstage/host/io/pfm.hpp"
+#include "util/atomic_file.hpp"
+#include "util/parallel.hpp"
+
+#include <cmath>
+#include <system_error>
+
+namespace lightstage::io {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool file_exists(const fs::path& path) {
+  std::error_code error;
+  return fs::exists(path, error);
+}
+
+std::string size_text(const cv::Mat& image) { return fmt::format("{}x{}", image.cols, image.rows); }
+
+std::string type_text(const cv::Mat& image) {
+  const char* depth = image.depth() == CV_8U ? "8-bit" : image.depth() == CV_16U ? "16-bit" : "float";
+  return fmt::format("{} {}", depth, image.channels() == 1 ? "grey" : "RGB");
+}
+
+std::string default_frame_name(std::size_t index, const cv::Mat& image) {
+  return fmt::format("{:03}.{}", index + 1, image.depth() == CV_32F ? "pfm" : "png");
+}
+
+std::string vec3_lines(const std::vector<Frame>& frames, bool directions) {
+  std::string text;
+  for (const auto& frame : frames) {
+    const Vec3& v = directions ? frame.light_direction : frame.light_intensity;
+    text += fmt::format("{:.9g} {:.9g} {:.9g}\n", v.x(), v.y(), v.z());
+  }
+  return text;
+}
+
+}  // namespace
+
+void LoadOptions::check() const {
+  if (min_images < 1) fail("LoadOptions.min_images: must be at least 1, got {}", min_images);
+  if (threads < 0) fail("LoadOptions.threads: must be 0 (automatic) or positive, got {}", threads);
+}
+
+ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
+  options.check();
+  std::error_code error;
+  if (!fs::exists(dir, error)) fail("{}: no such stack folder", dir.string());
+  if (!fs::is_directory(dir, error)) fail("{}: not a folder (a stack is a folder)", dir.string());
+
+  const fs::path names_path = dir / "filenames.txt";
+  const auto names = read_text_lines(names_path);
+  if (static_cast<int>(names.size()) < options.min_images) {
+    fail("{}: {} image(s) listed, at least {} needed", names_path.string(), names.size(), options.min_images);
+  }
+
+  const fs::path directions_path = dir / "light_directions.txt";
+  const auto directions = read_vec3_rows(directions_path);
+  if (directions.size() != names.size()) {
+    fail("{}: {} direction line(s), but filenames.txt lists {} images", directions_path.string(),
+         directions.size(), names.size());
+  }
+  for (const auto& row : directions) {
+    if (row.value.norm() < 1e-9)
+      fail("{}:{}: zero-length light direction", directions_path.string(), row.number);
+  }
+
+  const fs::path intensities_path = dir / "light_intensities.txt";
+  std::vector<Vec3Row> intensities;
+  if (file_exists(intensities_path)) {
+    intensities = read_vec3_rows(intensities_path);
+    if (intensities.size() != names.size()) {
+      fail("{}: {} intensity line(s), but filenames.txt lists {} images", intensities_path.string(),
+           intensities.size(), names.size());
+    }
+    for (const auto& row : intensities) {
+      if ((row.value.array() <= 0).any()) {
+        fail("{}:{}: light intensities must be positive, got '{} {} {}'", intensities_path.string(),
+             row.number, row.value.x(), row.value.y(), row.value.z());
+      }
+    }
+  }
+
+  ImageStack stack;
+  stack.frames.resize(names.size());
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    Frame& frame = stack.frames[i];
+    frame.filename = names[i].text;
+    frame.light_direction = directions[i].value.normalized();
+    if (!intensities.empty()) frame.light_intensity = intensities[i].value;
+  }
+  util::parallel_chunks(names.size(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      stack.frames[i].image = read_image(dir / stack.frames[i].filename);
+  });
+  const cv::Mat& first = stack.frames.front().image;
+  const fs::path first_path = dir / stack.frames.front().filename;
+  for (const auto& frame : stack.frames) {
+    const fs::path path = dir / frame.filename;
+    if (frame.image.size() != first.size()) {
+      fail("{}: image is {}, but {} is {}", path.string(), size_text(frame.image),
+           first_path.filename().string(), size_text(first));
+    }
+    if (frame.image.type() != first.type()) {
+      fail("{}: image is {}, but {} is {}", path.string(), type_text(frame.image),
+           first_path.filename().string(), type_text(first));
+    }
+  }
+
+  const fs::path mask_path = dir / "mask.png";
+  if (file_exists(mask_path)) {
+    stack.mask = read_mask(mask_path);
+    if (stack.mask.size() != first.size()) {
+      fail("{}: mask is {}, images are {} (e.g. {})", mask_path.string(), size_text(stack.mask),
+           size_text(first), first_path.filename().string());
+    }
+  }
+
+  if (options.load_ground_truth) {
+    const fs::path normals_path = dir / "Normal_gt.png";
+    const fs::path depth_path = dir / "depth_gt.pfm";
+    GroundTruth truth;
+    if (file_exists(normals_path)) {
+      auto decoded = read_normal_map(normals_path);
+      if (decoded.normals.size() != first.size()) {
+        fail("{}: ground truth is {}, images are {}", normals_path.string(), size_text(decoded.normals),
+             size_text(first));
+      }
+      truth.normals = decoded.normals;
+    }
+    if (file_exists(depth_path)) {
+      truth.depth = read_pfm(depth_path);
+      if (truth.depth.channels() != 1 || truth.depth.size() != first.size()) {
+        fail("{}: depth must be one channel of {}, got {} channel(s) of {}", depth_path.string(),
+             size_text(first), truth.depth.channels(), size_text(truth.depth));
+      }
+    }
+    if (!truth.normals.empty() || !truth.depth.empty()) stack.ground_truth = std::move(truth);
+  }
+
+  const fs::path manifest_path = dir / "manifest.json";
+  if (options.read_manifest && file_exists(manifest_path)) apply_manifest(manifest_path, stack);
+  return stack;
+}
+
+void write_stack(const fs::path& dir, const ImageStack& stack, const nlohmann::json& extra_manifest) {
+  if (stack.frames.empty()) fail("{}: cannot write a stack without frames", dir.string());
+  const cv::Mat& first = stack.frames.front().image;
+  StackFiles files;
+  for (std::size_t i = 0; i < stack.frames.size(); ++i) {
+    const Frame& frame = stack.frames[i];
+    if (frame.image.empty()) fail("{}: frame {} has no image", dir.string(), i);
+    if (frame.image.size() != first.size() || frame.image.type() != first.type()) {
+      fail("{}: frame {} is {} {}, frame 0 is {} {}", dir.string(), i, size_text(frame.image),
+           type_text(frame.image), size_text(first), type_text(first));
+    }
+    std::string name = frame.filename.empty() ? default_frame_name(i, frame.image) : frame.filename;
+    if (name.find('/') != std::string::npos || name.find('\n') != std::string::npos) {
+      fail("{}: frame {} file name '{}' must be a plain file name", dir.string(), i, name);
+    }
+    const bool is_float = frame.image.depth() == CV_32F;
+    if (is_float != (fs::path(name).extension() == ".pfm") ||
+        (!is_float && fs::path(name).extension() != ".png")) {
+      fail("{}: frame {} file name '{}' does not fit a {} image (use .png for 8/16-bit, .pfm for float)",
+           dir.string(), i, name, type_text(frame.image));
+    }
+    files.frames.push_back(std::move(name));
+  }
+  if (!stack.mask.empty() && (stack.mask.type() != CV_8UC1 || stack.mask.size() != first.size())) {
+    fail("{}: mask must be CV_8UC1 of {}, got type {} of {}", dir.string(), size_text(first),
+         stack.mask.type(), size_text(stack.mask));
+  }
+  // Checked before anything is written, so a bad extra_manifest leaves no half stack.
+  files.mask = stack.mask.empty() ? "" : "mask.png";
+  if (stack.ground_truth) {
+    if (!stack.ground_truth->normals.empty()) files.normals = "Normal_gt.png";
+    if (!stack.ground_truth->depth.empty()) files.depth = "depth_gt.pfm";
+  }
+  const nlohmann::json manifest = build_manifest(stack, files, extra_manifest);
+
+  std::error_code error;
+  fs::create_directories(dir, error);
+  if (error) fail("{}: cannot create folder: {}", dir.string(), error.message());
+
+  util::parallel_chunks(stack.frames.size(), 0, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const fs::path path = dir / files.frames[i];
+      if (stack.frames[i].image.depth() == CV_32F) {
+        write_pfm(path, stack.frames[i].image);
+      } else {
+        write_png(path, stack.frames[i].image);
+      }
+    }
+  });
+  std::string names;
+  for (const auto& name : files.frames) names += name + "\n";
+  util::write_text_atomic(dir / "filenames.txt", names);
+  util::write_text_atomic(dir / "light_directions.txt", vec3_lines(stack.frames, true));
+  util::write_text_atomic(dir / "light_intensities.txt", vec3_lines(stack.frames, false));
+  if (!files.mask.empty()) {
+    cv::Mat binary;
+    cv::compare(stack.mask, 0, binary, cv::CMP_GT);
+    write_png(dir / files.mask, binary);
+  }
+  if (!files.normals.empty()) write_normal_map(dir / files.normals, stack.ground_truth->normals, stack.mask);
+  if (!files.depth.empty()) write_pfm(dir / files.depth, stack.ground_truth->depth);
+  util::write_text_atomic(dir / "manifest.json", manifest.dump(2) + "\n");
+}
+
+}  // namespace lightstage::io

@@ -1,0 +1,204 @@
+#include "lightstage/host/solvers/lambertian.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "util/parallel.hpp"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <vector>
+
+namespace lightstage {
+namespace {
+
+// Smallest / largest eigenvalue of LᵀL below which the lights count as coplanar
+// (a condition number of L above 1000).
+constexpr double kMinEigenvalueRatio = 1e-6;
+
+struct Counters {
+  std::size_t solved = 0;
+  std::size_t too_few = 0;
+  std::size_t degenerate = 0;
+};
+
+struct Maps {
+  cv::Mat normals, albedo, residual, solved;
+};
+
+// Stores s for one pixel; false (degenerate) when s is zero or not finite.
+bool store(const Eigen::Vector3d& s, double rms, const cv::Point& pixel, Maps& maps) {
+  const double length = s.norm();
+  if (!std::isfinite(length) || length < 1e-12) return false;
+  const Eigen::Vector3d n = s / length;
+  maps.normals.at<cv::Vec3f>(pixel) =
+      cv::Vec3f(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
+  maps.albedo.at<float>(pixel) = static_cast<float>(length);
+  maps.residual.at<float>(pixel) = static_cast<float>(rms);
+  maps.solved.at<std::uint8_t>(pixel) = 255;
+  return true;
+}
+
+// All observations: one pseudo-inverse for every pixel.
+Counters solve_all(const Observations& obs, const L2Options& options, Maps& maps) {
+  const Eigen::Index images = static_cast<Eigen::Index>(obs.image_count());
+  const std::size_t pixels = obs.pixel_count();
+  Counters total;
+  if (images < options.min_observations) {
+    total.too_few = pixels;
+    return total;
+  }
+  const Eigen::MatrixX3d& lights = obs.lights;
+  const Eigen::Matrix3d gram = lights.transpose() * lights;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(gram);
+  const Eigen::Vector3d lambda = eigen.eigenvalues();
+  if (!(lambda(0) > kMinEigenvalueRatio * lambda(2))) {
+    total.degenerate = pixels;
+    return total;
+  }
+  const Eigen::Matrix<double, 3, Eigen::Dynamic> pinv = gram.inverse() * lights.transpose();
+  std::vector<Counters> per_chunk(static_cast<std::size_t>(util::resolve_threads(options.threads)));
+  util::parallel_chunks(pixels, options.threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
+    Counters& counters = per_chunk[chunk];
+    Eigen::VectorXd values(images);
+    for (std::size_t p = begin; p < end; ++p) {
+      values = obs.intensities.row(static_cast<Eigen::Index>(p)).transpose().cast<double>();
+      const Eigen::Vector3d s = pinv * values;
+      const double rms = std::sqrt((lights * s - values).squaredNorm() / static_cast<double>(images));
+      if (store(s, rms, obs.pixels[p], maps)) {
+        ++counters.solved;
+      } else {
+        ++counters.degenerate;
+      }
+    }
+  });
+  for (const auto& c : per_chunk) {
+    total.solved += c.solved;
+    total.degenerate += c.degenerate;
+  }
+  return total;
+}
+
+// Per-pixel selection: shadows dropped, the lowest t_low kept, 3×3 normal equations.
+Counters solve_selected(const Observations& obs, const L2Options& options, Maps& maps) {
+  const Eigen::Index images = static_cast<Eigen::Index>(obs.image_count());
+  const std::size_t pixels = obs.pixel_count();
+  std::vector<Counters> per_chunk(static_cast<std::size_t>(util::resolve_threads(options.threads)));
+  util::parallel_chunks(pixels, options.threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
+    Counters& counters = per_chunk[chunk];
+    std::vector<Eigen::Index> kept;
+    kept.reserve(static_cast<std::size_t>(images));
+    for (std::size_t p = begin; p < end; ++p) {
+      const auto row = obs.intensities.row(static_cast<Eigen::Index>(p));
+      kept.clear();
+      for (Eigen::Index j = 0; j < images; ++j) {
+        const float value = row(j);
+        if (!std::isfinite(value)) continue;
+        if (options.shadow_threshold >= 0 && static_cast<double>(value) <= options.shadow_threshold) continue;
+        kept.push_back(j);
+      }
+      if (options.t_low < 1.0) {
+        const auto keep =
+            static_cast<std::size_t>(std::ceil(options.t_low * static_cast<double>(kept.size()) - 1e-9));
+        std::stable_sort(kept.begin(), kept.end(),
+                         [&](Eigen::Index a, Eigen::Index b) { return row(a) < row(b); });
+        kept.resize(std::min(keep, kept.size()));
+      }
+      if (static_cast<int>(kept.size()) < options.min_observations) {
+        ++counters.too_few;
+        continue;
+      }
+      Eigen::Matrix3d gram = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+      for (const Eigen::Index j : kept) {
+        const Eigen::Vector3d l = obs.lights.row(j).transpose();
+        gram += l * l.transpose();
+        rhs += static_cast<double>(row(j)) * l;
+      }
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+      eigen.computeDirect(gram);
+      const Eigen::Vector3d lambda = eigen.eigenvalues();
+      if (!(lambda(0) > kMinEigenvalueRatio * lambda(2))) {
+        ++counters.degenerate;
+        continue;
+      }
+      const Eigen::Matrix3d& v = eigen.eigenvectors();
+      const Eigen::Vector3d s = v * (v.transpose() * rhs).cwiseQuotient(lambda);
+      double squared = 0;
+      for (const Eigen::Index j : kept) {
+        const double r = obs.lights.row(j).dot(s) - static_cast<double>(row(j));
+        squared += r * r;
+      }
+      if (store(s, std::sqrt(squared / static_cast<double>(kept.size())), obs.pixels[p], maps)) {
+        ++counters.solved;
+      } else {
+        ++counters.degenerate;
+      }
+    }
+  });
+  Counters total;
+  for (const auto& c : per_chunk) {
+    total.solved += c.solved;
+    total.too_few += c.too_few;
+    total.degenerate += c.degenerate;
+  }
+  return total;
+}
+
+}  // namespace
+
+void L2Options::check() const {
+  if (!std::isfinite(shadow_threshold))
+    fail("L2Options.shadow_threshold: must be finite, got {}", shadow_threshold);
+  if (!(t_low > 0 && t_low <= 1)) fail("L2Options.t_low: must be in (0, 1], got {}", t_low);
+  if (min_observations < 3) fail("L2Options.min_observations: must be at least 3, got {}", min_observations);
+  if (threads < 0) fail("L2Options.threads: must be 0 (automatic) or positive, got {}", threads);
+}
+
+nlohmann::json L2Options::to_json() const {
+  return {{"shadow_threshold", shadow_threshold},
+          {"t_low", t_low},
+          {"min_observations", min_observations},
+          {"threads", threads}};
+}
+
+SolveResult solve_lambertian(const Observations& observations, const L2Options& options) {
+  options.check();
+  const auto start = std::chrono::steady_clock::now();
+  const cv::Size size = observations.size;
+  if (static_cast<std::size_t>(observations.intensities.rows()) != observations.pixel_count() ||
+      static_cast<std::size_t>(observations.intensities.cols()) != observations.image_count()) {
+    fail("solve_lambertian: observations are {}x{}, expected {} pixels x {} images",
+         observations.intensities.rows(), observations.intensities.cols(), observations.pixel_count(),
+         observations.image_count());
+  }
+  Maps maps{cv::Mat(size, CV_32FC3, cv::Scalar::all(0)), cv::Mat(size, CV_32FC1, cv::Scalar::all(0)),
+            cv::Mat(size, CV_32FC1, cv::Scalar::all(0)), cv::Mat(size, CV_8UC1, cv::Scalar::all(0))};
+  const bool all = options.shadow_threshold < 0 && options.t_low >= 1.0;
+  const Counters counters =
+      all ? solve_all(observations, options, maps) : solve_selected(observations, options, maps);
+
+  SolveResult result;
+  result.normals = maps.normals;
+  result.albedo = maps.albedo;
+  result.residual = maps.residual;
+  result.solved = maps.solved;
+  result.parameters = options.to_json();
+  SolveSummary& summary = result.summary;
+  summary.method = "l2";
+  summary.pixels_in_mask = observations.pixel_count();
+  summary.pixels_solved = counters.solved;
+  summary.pixels_rejected_too_few_observations = counters.too_few;
+  summary.pixels_rejected_degenerate = counters.degenerate;
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  summary.message =
+      fmt::format("l2 ({}): solved {} of {} pixels ({} too few observations, {} degenerate)",
+                  all ? "all observations, one pseudo-inverse" : "per-pixel selection", summary.pixels_solved,
+                  summary.pixels_in_mask, summary.pixels_rejected_too_few_observations,
+                  summary.pixels_rejected_degenerate);
+  return result;
+}
+
+}  // namespace lightstage

@@ -1,0 +1,58 @@
+#include "lightstage/host/io/solve_output.hpp"
+
+#include "lightstage/common/version.hpp"
+#include "lightstage/host/io/image_io.hpp"
+#include "lightstage/host/io/normal_map.hpp"
+#include "lightstage/host/io/pfm.hpp"
+#include "lightstage/host/solvers/lambertian.hpp"
+#include "lightstage/testing/paths.hpp"
+#include "synthetic.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+namespace lightstage {
+namespace {
+
+TEST(HostSolveOutput, WritesEveryFileAndASummary) {
+  const auto scene = testing::make_scene(20, 10, 8, 3, false);
+  const SolveResult result = solve_lambertian(scene.observations, L2Options{});
+  const auto dir = testing::scratch_dir() / "out";
+  const auto written = io::write_solve_outputs(dir, result, "/some/input", {{"stack_images", 8}});
+
+  for (const char* name :
+       {"normal.png", "normal_vis.png", "albedo.png", "albedo.pfm", "residual.pfm", "summary.json"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / name)) << name;
+  }
+  const auto normals = io::read_normal_map(dir / "normal.png");
+  EXPECT_EQ(cv::countNonZero(normals.valid), 200);
+  EXPECT_LT(cv::norm(normals.normals, result.normals, cv::NORM_INF), 1e-4);
+  EXPECT_EQ(io::read_image(dir / "normal_vis.png").type(), CV_8UC3);
+  EXPECT_EQ(cv::norm(io::read_pfm(dir / "albedo.pfm"), result.albedo, cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(io::read_pfm(dir / "residual.pfm"), result.residual, cv::NORM_INF), 0);
+
+  const double scale = written["albedo_png_scale"];
+  EXPECT_GT(scale, 0.5);
+  const cv::Mat albedo16 = io::read_image(dir / "albedo.png");
+  ASSERT_EQ(albedo16.type(), CV_16UC1);
+  // Decoding albedo.png with the recorded scale gives the albedo (up to quantisation and the clip at 1).
+  const float a = result.albedo.at<float>(5, 5);
+  if (a < scale) {
+    EXPECT_NEAR(albedo16.at<std::uint16_t>(5, 5) / 65535.0 * scale, a, scale / 65535.0);
+  }
+
+  std::ifstream in(dir / "summary.json");
+  const auto summary = nlohmann::json::parse(in);
+  EXPECT_EQ(summary, written);
+  EXPECT_EQ(summary["method"], "l2");
+  EXPECT_EQ(summary["pixels_solved"], 200);
+  EXPECT_EQ(summary["input"], "/some/input");
+  EXPECT_EQ(summary["software"], std::string("lightstage ") + kVersion);
+  EXPECT_EQ(summary["parameters"]["t_low"], 1.0);
+  EXPECT_EQ(summary["stack_images"], 8);
+  EXPECT_TRUE(summary.contains("time"));
+}
+
+}  // namespace
+}  // namespace lightstage
