@@ -7,8 +7,8 @@
 #include "lightstage/common/version.hpp"
 #include "lightstage/hw/backends.hpp"
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <iostream>
@@ -26,7 +26,8 @@ int main(int argc, char** argv) {
     if (version) {
       fmt::print("lightstage-domed {}\n", lightstage::kVersion);
       for (const auto& backend : lightstage::hw::hardware_backends()) {
-        fmt::print("  {:10} {:40} {}\n", backend.scheme + ":", backend.what, backend.built ? "built" : "not built");
+        fmt::print("  {:10} {:40} {}\n", backend.scheme + ":", backend.what,
+                   backend.built ? "built" : "not built");
       }
       return 0;
     }
@@ -37,13 +38,14 @@ int main(int argc, char** argv) {
       shortest_on = std::min(shortest_on, led.limits.max_on_us);
       lowest_duty = std::min(lowest_duty, led.limits.max_duty);
     }
-    fmt::print("{}: rig '{}' is valid: {} LEDs, {} shift-register chain(s), trigger {}{}\n", rig_path, rig.name,
-               rig.leds.size(), rig.chains.size(), rig.trigger.line.describe(),
+    fmt::print("{}: rig '{}' is valid: {} LEDs, {} shift-register chain(s), trigger {}{}\n", rig_path,
+               rig.name, rig.leds.size(), rig.chains.size(), rig.trigger.line.describe(),
                rig.strobe ? ", strobe " + rig.strobe->line.describe() : std::string());
     fmt::print("limits: max on-time {:.0f} us, max duty {:.2f} (tightest over all LEDs)\n", shortest_on,
                lowest_duty);
     if (!check) {
-      lightstage::logger("firmware")->error("no GPIO backend given: the sequencer needs --gpio (see issue 3)");
+      lightstage::logger("firmware")
+          ->error("no GPIO backend given: the sequencer needs --gpio (see issue 3)");
       return 2;
     }
     return 0;

@@ -1,5 +1,5 @@
-#include "lightstage/common/error.hpp"
 #include "lightstage/common/rig.hpp"
+#include "lightstage/common/error.hpp"
 #include "lightstage/testing/paths.hpp"
 
 #include <gtest/gtest.h>

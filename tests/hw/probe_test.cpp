@@ -1,7 +1,7 @@
 // The real backends are built here but this machine has no GPIO chip, camera
 // or USB bus: probing must report that cleanly, never crash or hang.
-#include "lightstage/hw/backends.hpp"
 #include "lightstage/hw/probe.hpp"
+#include "lightstage/hw/backends.hpp"
 
 #include <gtest/gtest.h>
 
