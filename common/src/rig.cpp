@@ -2,7 +2,7 @@
 
 #include "lightstage/common/error.hpp"
 
-#include <yaml-cpp/yaml.h>
+#include "lightstage/common/yaml_field.hpp"
 
 #include <cmath>
 #include <cstdlib>
@@ -14,110 +14,28 @@
 namespace lightstage {
 namespace {
 
-// A YAML node together with where it came from, so that every error can name
-// the file, the line and the field's path ("leds[3].position_mm").
-class Field {
- public:
-  Field(YAML::Node node, std::string source, std::string path)
-      : node_(std::move(node)), source_(std::move(source)), path_(std::move(path)) {}
+using Field = YamlField;
 
-  [[noreturn]] void error(const std::string& what) const {
-    const int line = node_.Mark().line >= 0 ? node_.Mark().line + 1 : 0;
-    if (line > 0) fail("{}:{}: field '{}': {}", source_, line, path_, what);
-    fail("{}: field '{}': {}", source_, path_, what);
-  }
-
-  bool has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
-
-  Field operator[](const std::string& key) const {
-    if (!node_.IsMap()) error("expected a mapping");
-    YAML::Node child = node_[key];
-    if (!child.IsDefined()) error("missing key '" + key + "'");
-    return Field(child, source_, path_.empty() ? key : path_ + "." + key);
-  }
-
-  Field at(std::size_t i) const { return Field(node_[i], source_, path_ + "[" + std::to_string(i) + "]"); }
-
-  std::size_t size() const {
-    if (!node_.IsSequence()) error("expected a list");
-    return node_.size();
-  }
-
-  // Rejects keys outside `allowed`: a misspelt limit must not be silently ignored.
-  void only_keys(std::initializer_list<const char*> allowed) const {
-    if (!node_.IsMap()) error("expected a mapping");
-    std::set<std::string> known(allowed.begin(), allowed.end());
-    for (const auto& kv : node_) {
-      if (!kv.first.IsScalar()) Field(kv.first, source_, path_).error("keys must be plain names");
-      const auto key = kv.first.Scalar();
-      if (!known.contains(key)) {
-        Field(kv.first, source_, path_.empty() ? key : path_ + "." + key).error("unknown key");
-      }
-    }
-  }
-
-  template <typename T>
-  T as() const {
-    if (!node_.IsScalar()) error("expected a value");
-    try {
-      return node_.as<T>();
-    } catch (const YAML::Exception&) {
-      error("cannot read '" + node_.Scalar() + "' as " + type_name<T>());
-    }
-  }
-
-  double number() const {
-    const auto value = as<double>();
-    if (!std::isfinite(value)) error("must be a finite number");
-    return value;
-  }
-  double positive() const {
-    const double value = number();
-    if (value <= 0) error("must be positive, got " + node_.Scalar());
-    return value;
-  }
-  int integer() const { return as<int>(); }
-
-  Vec3 vec3() const {
-    if (!node_.IsSequence() || node_.size() != 3) error("expected [x, y, z]");
-    return {at(0).number(), at(1).number(), at(2).number()};
-  }
-
-  LineRef line() const {
-    LineRef ref;
-    if (node_.IsMap()) {
-      only_keys({"line", "active_low"});
-      ref = (*this)["line"].line();
-      if (has("active_low")) ref.active_low = (*this)["active_low"].as<bool>();
-      return ref;
-    }
-    const auto text = as<std::string>();
-    char* end = nullptr;
-    const long offset = std::strtol(text.c_str(), &end, 10);
-    if (!text.empty() && end && *end == '\0') {
-      if (offset < 0 || offset > 4095) error("line offset out of range: " + text);
-      ref.offset = static_cast<int>(offset);
-    } else {
-      ref.name = text;
-    }
+// A line: an offset ("7"), a name ("LED_07"), or {line: ..., active_low: true}.
+LineRef parse_line(const Field& f) {
+  LineRef ref;
+  if (f.is_map()) {
+    f.only_keys({"line", "active_low"});
+    ref = parse_line(f["line"]);
+    if (f.has("active_low")) ref.active_low = f["active_low"].boolean();
     return ref;
   }
-
-  const std::string& path() const { return path_; }
-
- private:
-  template <typename T>
-  static const char* type_name() {
-    if constexpr (std::is_same_v<T, bool>) return "true/false";
-    if constexpr (std::is_integral_v<T>) return "an integer";
-    if constexpr (std::is_floating_point_v<T>) return "a number";
-    return "text";
+  const std::string text = f.text();
+  char* end = nullptr;
+  const long offset = std::strtol(text.c_str(), &end, 10);
+  if (!text.empty() && end && *end == '\0') {
+    if (offset < 0 || offset > 4095) f.error("line offset out of range: " + text);
+    ref.offset = static_cast<int>(offset);
+  } else {
+    ref.name = text;
   }
-
-  YAML::Node node_;
-  std::string source_;
-  std::string path_;
-};
+  return ref;
+}
 
 LedLimits parse_limits(const Field& f, LedLimits limits) {
   f.only_keys({"max_on_us", "max_duty", "duty_window_us"});
@@ -135,7 +53,7 @@ CameraDefaults parse_camera(const Field& f) {
                "bit_depth", "uri"});
   CameraDefaults cam;
   if (f.has("model")) {
-    const auto model = f["model"].as<std::string>();
+    const auto model = f["model"].text();
     if (model == "orthographic") {
       cam.model = CameraModel::kOrthographic;
     } else if (model == "pinhole") {
@@ -160,18 +78,18 @@ CameraDefaults parse_camera(const Field& f) {
     cam.bit_depth = f["bit_depth"].integer();
     if (cam.bit_depth < 8 || cam.bit_depth > 16) f["bit_depth"].error("must be in 8..16");
   }
-  if (f.has("uri")) cam.uri = f["uri"].as<std::string>();
+  if (f.has("uri")) cam.uri = f["uri"].text();
   return cam;
 }
 
 ShiftRegisterChain parse_chain(const Field& f) {
   f.only_keys({"name", "data", "clock", "latch", "output_enable", "length", "clock_period_us"});
   ShiftRegisterChain chain;
-  chain.name = f["name"].as<std::string>();
-  chain.data = f["data"].line();
-  chain.clock = f["clock"].line();
-  chain.latch = f["latch"].line();
-  if (f.has("output_enable")) chain.output_enable = f["output_enable"].line();
+  chain.name = f["name"].text();
+  chain.data = parse_line(f["data"]);
+  chain.clock = parse_line(f["clock"]);
+  chain.latch = parse_line(f["latch"]);
+  if (f.has("output_enable")) chain.output_enable = parse_line(f["output_enable"]);
   chain.length = f["length"].integer();
   if (chain.length <= 0 || chain.length > 4096) f["length"].error("must be in 1..4096");
   if (f.has("clock_period_us")) chain.clock_period_us = f["clock_period_us"].positive();
@@ -189,11 +107,11 @@ Led parse_led(const Field& f, const LedLimits& default_limits, const std::string
     f.error("an LED is wired either to a 'line' or to a 'chain' bit, exactly one");
   }
   if (f.has("line")) {
-    led.wiring = DirectWiring{f["line"].line()};
+    led.wiring = DirectWiring{parse_line(f["line"])};
   } else {
-    led.wiring = ChainWiring{f["chain"].as<std::string>(), f["bit"].integer()};
+    led.wiring = ChainWiring{f["chain"].text(), f["bit"].integer()};
   }
-  led.colour = f.has("colour") ? f["colour"].as<std::string>() : default_colour;
+  led.colour = f.has("colour") ? f["colour"].text() : default_colour;
   if (f.has("wavelength_nm")) led.wavelength_nm = f["wavelength_nm"].positive();
   if (f.has("relative_intensity")) led.relative_intensity = f["relative_intensity"].positive();
   led.limits = f.has("limits") ? parse_limits(f["limits"], default_limits) : default_limits;
@@ -250,32 +168,31 @@ void check_rig(const Rig& rig, const Field& root) {
   }
 }
 
-Rig parse_document(const YAML::Node& doc, const std::string& source) {
-  const Field root(doc, source, "");
-  if (!doc.IsMap()) root.error("a rig file is a YAML mapping");
+Rig parse_document(const Field& root, const std::string& source) {
+  if (!root.is_map()) root.error("a rig file is a YAML mapping");
   root.only_keys({"name", "description", "dome_radius_mm", "object_position_mm", "camera", "trigger",
                   "strobe", "chains", "led_defaults", "leds"});
   Rig rig;
   rig.source = source;
-  rig.name = root["name"].as<std::string>();
+  rig.name = root["name"].text();
   if (rig.name.empty()) root["name"].error("must not be empty");
-  if (root.has("description")) rig.description = root["description"].as<std::string>();
+  if (root.has("description")) rig.description = root["description"].text();
   rig.dome_radius_mm = root["dome_radius_mm"].positive();
   if (root.has("object_position_mm")) rig.object_position_mm = root["object_position_mm"].vec3();
   rig.camera = parse_camera(root["camera"]);
 
   const Field trigger = root["trigger"];
   trigger.only_keys({"line", "active_low", "pulse_us"});
-  rig.trigger.line = trigger["line"].line();
-  if (trigger.has("active_low")) rig.trigger.line.active_low = trigger["active_low"].as<bool>();
+  rig.trigger.line = parse_line(trigger["line"]);
+  if (trigger.has("active_low")) rig.trigger.line.active_low = trigger["active_low"].boolean();
   if (trigger.has("pulse_us")) rig.trigger.pulse_us = trigger["pulse_us"].positive();
 
   if (root.has("strobe")) {
     const Field strobe = root["strobe"];
     strobe.only_keys({"line", "active_low", "timeout_us"});
     StrobeLine s;
-    s.line = strobe["line"].line();
-    if (strobe.has("active_low")) s.line.active_low = strobe["active_low"].as<bool>();
+    s.line = parse_line(strobe["line"]);
+    if (strobe.has("active_low")) s.line.active_low = strobe["active_low"].boolean();
     if (strobe.has("timeout_us")) s.timeout_us = strobe["timeout_us"].positive();
     rig.strobe = s;
   }
@@ -291,7 +208,7 @@ Rig parse_document(const YAML::Node& doc, const std::string& source) {
     const Field defaults = root["led_defaults"];
     defaults.only_keys({"limits", "colour"});
     if (defaults.has("limits")) default_limits = parse_limits(defaults["limits"], default_limits);
-    if (defaults.has("colour")) default_colour = defaults["colour"].as<std::string>();
+    if (defaults.has("colour")) default_colour = defaults["colour"].text();
   }
 
   const Field leds = root["leds"];
@@ -324,23 +241,11 @@ const ShiftRegisterChain* Rig::chain(const std::string& chain_name) const {
 }
 
 Rig parse_rig(const std::string& yaml_text, const std::string& source) {
-  try {
-    return parse_document(YAML::Load(yaml_text), source);
-  } catch (const YAML::ParserException& e) {
-    fail("{}:{}: not valid YAML: {}", source, e.mark.line + 1, e.msg);
-  } catch (const YAML::Exception& e) {
-    // Field reports what it can name itself; anything yaml-cpp still throws is
-    // a structure we did not anticipate, reported with its position.
-    fail("{}:{}: {}", source, e.mark.line + 1, e.msg);
-  }
+  return parse_yaml(yaml_text, source, [&](const YamlField& root) { return parse_document(root, source); });
 }
 
 Rig load_rig(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) fail("{}: cannot open rig file", path.string());
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_rig(text.str(), path.string());
+  return parse_rig(read_text_file(path, "rig file"), path.string());
 }
 
 std::filesystem::path rig_directory() {

@@ -1,6 +1,7 @@
 #include "lightstage/sim/scene_file.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/yaml_field.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -13,103 +14,7 @@
 namespace lightstage::sim {
 namespace {
 
-// A YAML node with its file and field path, so errors say "file:line: field
-// 'object.radius_mm': ..." (the same style as common/src/rig.cpp).
-class Field {
- public:
-  Field(YAML::Node node, std::string source, std::string path)
-      : node_(std::move(node)), source_(std::move(source)), path_(std::move(path)) {}
-
-  [[noreturn]] void error(const std::string& what) const {
-    const int line = node_.Mark().line >= 0 ? node_.Mark().line + 1 : 0;
-    if (line > 0) fail("{}:{}: field '{}': {}", source_, line, path_, what);
-    fail("{}: field '{}': {}", source_, path_, what);
-  }
-
-  bool has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
-  bool is_map() const { return node_.IsMap(); }
-  bool is_scalar() const { return node_.IsScalar(); }
-
-  Field operator[](const std::string& key) const {
-    if (!node_.IsMap()) error("expected a mapping");
-    YAML::Node child = node_[key];
-    if (!child.IsDefined()) error("missing key '" + key + "'");
-    return Field(child, source_, path_.empty() ? key : path_ + "." + key);
-  }
-
-  Field at(std::size_t i) const { return Field(node_[i], source_, path_ + "[" + std::to_string(i) + "]"); }
-
-  std::size_t size() const {
-    if (!node_.IsSequence()) error("expected a list");
-    return node_.size();
-  }
-
-  void only_keys(const std::set<std::string>& known) const {
-    if (!node_.IsMap()) error("expected a mapping");
-    for (const auto& kv : node_) {
-      const auto key = kv.first.Scalar();
-      if (!known.contains(key)) {
-        Field(kv.first, source_, path_.empty() ? key : path_ + "." + key).error("unknown key");
-      }
-    }
-  }
-
-  std::string text() const {
-    if (!node_.IsScalar()) error("expected a value");
-    return node_.Scalar();
-  }
-
-  double number() const {
-    if (!node_.IsScalar()) error("expected a number");
-    double value = 0;
-    try {
-      value = node_.as<double>();
-    } catch (const YAML::Exception&) {
-      error("cannot read '" + node_.Scalar() + "' as a number");
-    }
-    if (!std::isfinite(value)) error("must be a finite number");
-    return value;
-  }
-  double positive() const {
-    const double value = number();
-    if (value <= 0) error("must be positive, got " + node_.Scalar());
-    return value;
-  }
-  double non_negative() const {
-    const double value = number();
-    if (value < 0) error("must not be negative, got " + node_.Scalar());
-    return value;
-  }
-  int integer() const {
-    if (!node_.IsScalar()) error("expected an integer");
-    try {
-      return node_.as<int>();
-    } catch (const YAML::Exception&) {
-      error("cannot read '" + node_.Scalar() + "' as an integer");
-    }
-  }
-  bool boolean() const {
-    if (!node_.IsScalar()) error("expected true or false");
-    try {
-      return node_.as<bool>();
-    } catch (const YAML::Exception&) {
-      error("cannot read '" + node_.Scalar() + "' as true/false");
-    }
-  }
-  Vec2 vec2() const {
-    if (!node_.IsSequence() || node_.size() != 2) error("expected [x, y]");
-    return {at(0).number(), at(1).number()};
-  }
-  Vec3 vec3() const {
-    if (!node_.IsSequence() || node_.size() != 3) error("expected [x, y, z]");
-    return {at(0).number(), at(1).number(), at(2).number()};
-  }
-
- private:
-  YAML::Node node_;
-  std::string source_;
-  std::string path_;
-};
+using Field = YamlField;
 
 HeightField::Footprint parse_footprint(const Field& f, double* size_mm, double default_size) {
   *size_mm = default_size;
@@ -247,9 +152,8 @@ CameraOverrides parse_camera(const Field& f) {
   return c;
 }
 
-Scene parse_document(const YAML::Node& doc, const std::string& source) {
-  const Field root(doc, source, "");
-  if (!doc.IsMap()) root.error("a scene file is a YAML mapping");
+Scene parse_document(const Field& root, const std::string& source) {
+  if (!root.is_map()) root.error("a scene file is a YAML mapping");
   root.only_keys({"name", "object", "material", "albedo", "camera", "led_radius_mm", "led_radiance",
                   "highlight_blur_px", "cast_shadows"});
   Scene scene;
@@ -324,21 +228,11 @@ albedo: {type: noise, values: [0.55, 0.9], period_mm: 20, seed: 7}
 }  // namespace
 
 Scene parse_scene(const std::string& yaml_text, const std::string& source) {
-  try {
-    return parse_document(YAML::Load(yaml_text), source);
-  } catch (const YAML::ParserException& e) {
-    fail("{}:{}: not valid YAML: {}", source, e.mark.line + 1, e.msg);
-  } catch (const YAML::Exception& e) {
-    fail("{}:{}: {}", source, e.mark.line + 1, e.msg);
-  }
+  return parse_yaml(yaml_text, source, [&](const Field& root) { return parse_document(root, source); });
 }
 
 Scene load_scene(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) fail("{}: cannot open scene file", path.string());
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_scene(text.str(), path.string());
+  return parse_scene(read_text_file(path, "scene file"), path.string());
 }
 
 std::vector<std::string> scene_presets() {
