@@ -14,4 +14,6 @@ case "$flavour" in
 esac
 jobs=${LIGHTSTAGE_JOBS:-$(nproc)}
 cmake -S "$root" -B "$dir" -G Ninja "${args[@]}" >/dev/null
-cmake --build "$dir" -j "$jobs"
+target=()
+[ "$flavour" = fuzz ] && target=(--target fuzz_targets)  # only the fuzzers need the fuzz flags
+cmake --build "$dir" -j "$jobs" "${target[@]}"
