@@ -1,6 +1,7 @@
 #include "lightstage/host/io/image_io.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/testing/errors.hpp"
 #include "lightstage/testing/paths.hpp"
 
 #include <gmock/gmock.h>
@@ -14,14 +15,7 @@ namespace {
 
 using ::testing::HasSubstr;
 
-std::string error_of(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no InputError)";
-}
+using testing::error_of;
 
 cv::Mat ramp(int type, int rows = 7, int cols = 9) {
   cv::Mat image(rows, cols, type);

@@ -2,6 +2,7 @@
 #include "lightstage/host/io/image_io.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/testing/errors.hpp"
 #include "lightstage/testing/paths.hpp"
 
 #include <gmock/gmock.h>
@@ -15,14 +16,7 @@ namespace {
 
 using ::testing::HasSubstr;
 
-std::string error_of(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no InputError)";
-}
+using testing::error_of;
 
 void write_raw(const std::filesystem::path& path, const std::string& header, const std::vector<float>& values,
                bool big_endian) {
