@@ -3,7 +3,9 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/image_io.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace lightstage::io {
 namespace {

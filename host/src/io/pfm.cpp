@@ -6,12 +6,13 @@
 #include <opencv2/core.hpp>
 
 #include <bit>
+#include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <iterator>
-#include <sstream>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -26,6 +27,15 @@ bool next_token(const std::string& data, std::size_t& pos, std::string& token) {
   while (pos < data.size() && !std::isspace(static_cast<unsigned char>(data[pos]))) ++pos;
   token = data.substr(start, pos - start);
   return !token.empty();
+}
+
+// Parses the whole token as a number.
+template <typename T>
+bool parse_whole(const std::string& token, T& value) {
+  const char* begin = token.data();
+  const char* end = begin + token.size();
+  const auto [next, error] = std::from_chars(begin, end, value);
+  return error == std::errc() && next == end;
 }
 
 std::uint32_t byte_swap(std::uint32_t v) {
@@ -50,13 +60,8 @@ cv::Mat read_pfm(const std::filesystem::path& path) {
   }
   int width = 0, height = 0;
   double scale = 0;
-  try {
-    std::size_t used_w = 0, used_h = 0, used_s = 0;
-    width = std::stoi(width_text, &used_w);
-    height = std::stoi(height_text, &used_h);
-    scale = std::stod(scale_text, &used_s);
-    if (used_w != width_text.size() || used_h != height_text.size() || used_s != scale_text.size()) throw 0;
-  } catch (...) {
+  if (!parse_whole(width_text, width) || !parse_whole(height_text, height) ||
+      !parse_whole(scale_text, scale)) {
     fail("{}: malformed PFM header '{} {} {}'", path.string(), width_text, height_text, scale_text);
   }
   if (width <= 0 || height <= 0 || width > 1 << 16 || height > 1 << 16) {
