@@ -26,7 +26,7 @@ for flavour in $flavours; do
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     ctest --test-dir "$dir" --output-on-failure -j "$jobs" --timeout 900 2>&1 | tee "$log"
   set -e
-  summary=$(grep -E "tests passed, [0-9]+ tests failed out of" "$log" | tail -1)
+  summary=$(grep -E "tests passed, [0-9]+ tests failed out of" "$log" | tail -1 || true)
   total=$(echo "$summary" | sed -E 's/.* out of ([0-9]+).*/\1/')
   bad=$(echo "$summary" | sed -E 's/.* ([0-9]+) tests failed.*/\1/')
   if [ -z "$summary" ]; then

@@ -15,6 +15,8 @@ void SimulateArgs::resolve() {
     options.sensor.noise = sim::NoiseModel::kPhysical;
   } else if (noise == "signal-dependent") {
     options.sensor.noise = sim::NoiseModel::kSignalDependent;
+    if (!(options.sensor.lambda > 0))
+      fail("--noise signal-dependent needs --lambda > 0 (the dissertation uses 0.05-0.3)");
   } else {
     fail("--noise: unknown model '{}' (none, physical, signal-dependent)", noise);
   }

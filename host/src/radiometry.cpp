@@ -29,7 +29,9 @@ void convert_frame(const Frame& frame, const std::vector<cv::Point>& pixels, con
   const Vec3& intensity = frame.light_intensity;  // r, g, b
   const bool colour = image.channels() == 3;
   // Grey images: divide by the grey of the light.
-  const double grey_intensity = kRed * intensity.x() + kGreen * intensity.y() + kBlue * intensity.z();
+  // The BT.601 weights sum to 0.9999: normalise so that a grey light of 1 divides by exactly 1.
+  const double grey_intensity =
+      (kRed * intensity.x() + kGreen * intensity.y() + kBlue * intensity.z()) / (kRed + kGreen + kBlue);
   for (std::size_t p = 0; p < pixels.size(); ++p) {
     const T* px = image.ptr<T>(pixels[p].y) + pixels[p].x * image.channels();
     double value = 0;

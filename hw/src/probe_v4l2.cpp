@@ -7,8 +7,8 @@
 #include <sys/ioctl.h>
 #include <unistd.h>
 
-#include <filesystem>
 #include <fmt/format.h>
+#include <filesystem>
 #include <string>
 
 namespace lightstage::hw {
@@ -19,15 +19,16 @@ ProbeReport probe_v4l2() {
   for (const auto& entry : std::filesystem::directory_iterator("/dev", ec)) {
     const std::string name = entry.path().filename().string();
     if (name.rfind("video", 0) != 0) continue;
-    const int fd = ::open(entry.path().c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+    const int fd = ::open(entry.path().c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) continue;
     v4l2_capability caps{};
     if (::ioctl(fd, VIDIOC_QUERYCAP, &caps) == 0) {
-      const auto device_caps = (caps.capabilities & V4L2_CAP_DEVICE_CAPS) ? caps.device_caps : caps.capabilities;
+      const auto device_caps =
+          (caps.capabilities & V4L2_CAP_DEVICE_CAPS) ? caps.device_caps : caps.capabilities;
       if (device_caps & (V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_VIDEO_CAPTURE_MPLANE)) {
-        report.devices.push_back({"v4l2:" + entry.path().string(),
-                                  fmt::format("{} ({})", reinterpret_cast<const char*>(caps.card),
-                                              reinterpret_cast<const char*>(caps.driver))});
+        report.devices.push_back(
+            {"v4l2:" + entry.path().string(), fmt::format("{} ({})", reinterpret_cast<const char*>(caps.card),
+                                                          reinterpret_cast<const char*>(caps.driver))});
       }
     }
     ::close(fd);

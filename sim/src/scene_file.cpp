@@ -169,7 +169,10 @@ Scene parse_document(const Field& root, const std::string& source) {
   if (root.has("camera")) scene.camera = parse_camera(root["camera"]);
   if (root.has("led_radius_mm")) scene.led_radius_mm = root["led_radius_mm"].positive();
   if (root.has("led_radiance")) scene.led_radiance = root["led_radiance"].non_negative();
-  if (root.has("highlight_blur_px")) scene.highlight_blur_px = root["highlight_blur_px"].non_negative();
+  if (root.has("highlight_blur_px")) {
+    scene.highlight_blur_px = root["highlight_blur_px"].non_negative();
+    if (scene.highlight_blur_px > 20) root["highlight_blur_px"].error("must be at most 20 pixels");
+  }
   if (root.has("cast_shadows")) scene.cast_shadows = root["cast_shadows"].boolean();
   return scene;
 }

@@ -3,7 +3,9 @@
 #include "lightstage/testing/paths.hpp"
 #include "lightstage/testing/run.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include <fstream>
 
@@ -95,6 +97,31 @@ TEST(BadInput, BadSolverOptionNamesTheFlag) {
   const auto run =
       run_lightstage({"solve", "--input", stack.string(), "--t-low", "1.5", "--out", (stack / "o").string()});
   expect_one_line_error(run, "t_low");
+}
+
+TEST(BadInput, ImageOutsideTheStackFolder) {
+  const auto stack = make_stack(testing::scratch_dir());
+  std::string text;
+  for (int i = 1; i <= 96; ++i) text += i == 7 ? "../elsewhere.png\n" : fmt::format("{:03}.png\n", i);
+  std::ofstream(stack / "filenames.txt") << text;
+  const auto run = solve(stack);
+  expect_one_line_error(run, "filenames.txt:7");
+}
+
+TEST(BadInput, EvalWithNothingToCompare) {
+  // An all-zero normal map holds no normal: that is no result, not a 0-degree one.
+  const auto stack = make_stack(testing::scratch_dir());
+  const cv::Mat empty(32, 32, CV_16UC3, cv::Scalar::all(0));
+  cv::imwrite((stack / "empty.png").string(), empty);
+  expect_one_line_error(
+      run_lightstage({"eval", "--pred", (stack / "empty.png").string(), "--gt", stack.string()}),
+      "no pixel has both");
+}
+
+TEST(BadInput, SignalDependentNoiseNeedsLambda) {
+  const auto run = run_lightstage(
+      {"simulate", "--noise", "signal-dependent", "--out", (testing::scratch_dir() / "s").string()});
+  expect_one_line_error(run, "--lambda");
 }
 
 TEST(BadInput, UnknownScene) {

@@ -73,8 +73,9 @@ TEST(HostRadiometry, GreyEightBitWithBlackLevelSaturationAndMask) {
   EXPECT_EQ(obs.pixels[0], cv::Point(1, 1));
   EXPECT_EQ(obs.pixels[1], cv::Point(0, 2));
   EXPECT_EQ(obs.mask.at<std::uint8_t>(2, 0), 255);
-  // Grey images divide by the grey of the intensity: (0.2989+0.587+0.114)·2.
-  EXPECT_NEAR(obs.intensities(0, 0), 90 / 255.0 / (2 * (kR + kG + kB)), 1e-6);
+  // Grey images divide by the grey of the intensity, with the BT.601 weights
+  // normalised to sum to 1: a grey light of 2 divides by exactly 2.
+  EXPECT_NEAR(obs.intensities(0, 0), 90 / 255.0 / 2, 1e-6);
   EXPECT_TRUE(obs.saturated(0, 2));
   EXPECT_FALSE(obs.saturated(0, 1));
   EXPECT_FALSE(obs.saturated(1, 2));

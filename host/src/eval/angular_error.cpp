@@ -100,7 +100,13 @@ AngularErrorStats evaluate_normal_map(const std::filesystem::path& predicted_png
            truth_path.string(), truth.normals.cols, truth.normals.rows);
     }
   }
-  return angular_error(predicted.normals, truth.normals, mask).stats;
+  const AngularErrorStats stats = angular_error(predicted.normals, truth.normals, mask).stats;
+  // Zero compared pixels would print as a perfect 0 degrees.
+  if (stats.count == 0) {
+    fail("{}: no pixel has both a prediction and ground truth in {}", predicted_png.string(),
+         truth_dir.string());
+  }
+  return stats;
 }
 
 }  // namespace lightstage

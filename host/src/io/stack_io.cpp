@@ -10,6 +10,7 @@
 #include "util/atomic_file.hpp"
 #include "util/parallel.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <system_error>
 
@@ -58,6 +59,14 @@ ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
 
   const fs::path names_path = dir / "filenames.txt";
   const auto names = read_text_lines(names_path);
+  for (const auto& name : names) {
+    const fs::path relative(name.text);
+    if (relative.is_absolute() ||
+        std::any_of(relative.begin(), relative.end(), [](const fs::path& part) { return part == ".."; })) {
+      fail("{}:{}: '{}' must name a file inside the stack folder", names_path.string(), name.number,
+           name.text);
+    }
+  }
   if (static_cast<int>(names.size()) < options.min_images) {
     fail("{}: {} image(s) listed, at least {} needed", names_path.string(), names.size(), options.min_images);
   }
