@@ -45,3 +45,7 @@ endif()
 if(LIGHTSTAGE_BUILD_BENCHMARKS)
   find_package(benchmark REQUIRED)
 endif()
+
+# The wire protocol: protobuf messages (libprotobuf-dev, protobuf-compiler) and zlib's CRC-32.
+find_package(Protobuf 3.12 REQUIRED)
+find_package(ZLIB REQUIRED)

@@ -11,6 +11,7 @@ packages=(
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libgpiod-dev libusb-1.0-0-dev libcamera-dev
+  libprotobuf-dev protobuf-compiler zlib1g-dev
 )
 
 missing=()

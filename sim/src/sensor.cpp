@@ -131,6 +131,12 @@ Sensor::Sensor(const SensorOptions& options, const CameraDefaults& rig_camera) :
     fail("sensor: black_level {} must be below the full-scale code {}", options.black_level, full_code_);
   }
   k_ = options.full_scale_fraction * exposure_ratio_ * gain_ratio_;
+  // The pixel well fills at the rig gain's full scale: below that gain the
+  // brightest code is under full scale, and that code is where clipping starts.
+  clip_y_ = std::min(1.0, gain_ratio_);
+  saturation_code_ = std::min(
+      max_code_, std::nearbyint((options.black_level + options.response.apply(clip_y_) * full_code_) / step_)) *
+                     step_;
 }
 
 cv::Mat Sensor::expose(const cv::Mat& shading, std::uint64_t seed, std::uint64_t frame_index) const {
@@ -162,7 +168,7 @@ cv::Mat Sensor::expose(const cv::Mat& shading, std::uint64_t seed, std::uint64_t
           y += options_.lambda * y * normal(rng);
           break;
       }
-      y = std::min(y, 1.0);
+      y = std::min(y, clip_y_);
       const double yr = y >= 0 ? options_.response.apply(y) : y;
       double code = std::nearbyint((options_.black_level + yr * full_code_) / step_);
       code = std::isfinite(code) ? std::clamp(code, 0.0, max_code_) : 0.0;
@@ -181,7 +187,7 @@ nlohmann::json Sensor::describe() const {
                    {"bit_depth", bits_},
                    {"scale_to_16bit", options_.scale_to_16bit},
                    {"black_level", options_.black_level},
-                   {"saturation_level", full_code_},
+                   {"saturation_level", saturation_code_},
                    {"full_scale_fraction", options_.full_scale_fraction},
                    {"noise", noise},
                    {"response", options_.response.describe()}};

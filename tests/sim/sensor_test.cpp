@@ -88,6 +88,21 @@ TEST(SimSensor, ExposureAndGainScaleTheSignal) {
   EXPECT_DOUBLE_EQ(sensor.dn_per_shading(), 0.8 * 0.5 * 1.5 * 65535);
 }
 
+// Below the rig's gain the well fills before the ADC does: bright pixels stop
+// at a code under full scale, and saturation_level() reports that code.
+TEST(SimSensor, LowGainSaturatesBelowFullScale) {
+  SensorOptions o = noiseless();
+  o.gain = 0.5;
+  const Sensor sensor(o, CameraDefaults{});
+  EXPECT_DOUBLE_EQ(sensor.saturation_level(), std::nearbyint(0.5 * 65535));
+  cv::Mat s(2, 2, CV_64FC1, cv::Scalar(10.0));
+  s.at<double>(0, 0) = 0.5;  // y = 0.2, well below the well
+  const cv::Mat dn = sensor.expose(s, 1, 0);
+  EXPECT_EQ(dn.at<std::uint16_t>(1, 1), sensor.saturation_level());
+  EXPECT_LT(sensor.saturation_level(), 65535);
+  EXPECT_EQ(dn.at<std::uint16_t>(0, 0), std::nearbyint(0.5 * 0.8 * 0.5 * 65535));
+}
+
 double stddev(const cv::Mat& dn) {
   cv::Scalar mean, sd;
   cv::meanStdDev(dn, mean, sd);

@@ -16,11 +16,13 @@
 // those observations; the Lambertian baseline ignores the flags.
 
 #include "lightstage/common/image_stack.hpp"
+#include "lightstage/host/near_lights.hpp"
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 namespace lightstage {
@@ -46,6 +48,9 @@ struct Observations {
   ObservationMatrix intensities;  // pixels × images, linear grey values as above
   FlagMatrix saturated;           // pixels × images, true = raw value at or above saturation
   Eigen::MatrixX3d lights;        // images × 3, unit light directions (object -> light)
+  // Set when LED positions are known: per-pixel directions and falloff
+  // (near_light_directions) replace `lights`, which stays the distant approximation.
+  std::optional<NearLights> near;
 
   std::size_t pixel_count() const { return pixels.size(); }
   std::size_t image_count() const { return static_cast<std::size_t>(lights.rows()); }

@@ -80,7 +80,7 @@ class Sensor {
   int bit_depth() const { return bits_; }
   double black_level() const { return options_.black_level; }
   // Stored DN at and above which a pixel is clipped.
-  double saturation_level() const { return full_code_; }
+  double saturation_level() const { return saturation_code_; }
   // DN above black level per unit shading, under a linear response and no noise.
   double dn_per_shading() const { return k_ * full_code_; }
   nlohmann::json describe() const;
@@ -90,6 +90,8 @@ class Sensor {
   double exposure_us_, gain_, exposure_ratio_, gain_ratio_;
   int bits_;
   double step_, full_code_, max_code_, k_;
+  double clip_y_ = 1;           // linear signal at which the well is full
+  double saturation_code_ = 0;  // stored DN of a clipped pixel
 };
 
 // The generator for one frame's noise: mt19937_64 seeded from a hash of (seed, frame).

@@ -1,0 +1,50 @@
+#pragma once
+// Framing for byte streams (serial, TCP, Unix sockets, USB bulk):
+//
+//   'L' 'S' | length u32 LE | payload (length bytes) | CRC-32 u32 LE of payload
+//
+// The magic lets a reader resynchronise after garbage; the length is bounded
+// so a corrupt header cannot make a reader wait for gigabytes; the CRC (zlib's
+// CRC-32) rejects frames damaged on the wire. Payloads are serialized protobuf
+// messages (common/proto/lightstage/proto/*.proto).
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace lightstage::protocol {
+
+inline constexpr std::uint8_t kMagic0 = 'L';
+inline constexpr std::uint8_t kMagic1 = 'S';
+inline constexpr std::size_t kHeaderSize = 6;   // magic + length
+inline constexpr std::size_t kTrailerSize = 4;  // CRC-32
+inline constexpr std::size_t kMaxPayload = 1u << 20;
+
+// Throws lightstage::Error when the payload exceeds kMaxPayload.
+std::vector<std::uint8_t> encode_frame(std::span<const std::uint8_t> payload);
+
+// Incremental decoder: feed bytes as they arrive, take frames out.
+class FrameDecoder {
+ public:
+  struct Frame {
+    std::vector<std::uint8_t> payload;  // valid when error is empty
+    std::string error;                  // why bytes were dropped (bad CRC, oversize length, garbage)
+  };
+
+  void feed(std::span<const std::uint8_t> bytes);
+  // The next complete frame, or a report of dropped bytes (the decoder has
+  // already skipped past them and stays usable); nullopt when more bytes are needed.
+  std::optional<Frame> next();
+  std::size_t buffered() const { return buffer_.size() - start_; }
+
+ private:
+  void compact();
+
+  std::vector<std::uint8_t> buffer_;
+  std::size_t start_ = 0;
+};
+
+}  // namespace lightstage::protocol
