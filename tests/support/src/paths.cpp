@@ -30,6 +30,22 @@ std::filesystem::path scratch_dir() {
   return dir;
 }
 
+std::filesystem::path socket_dir() {
+  // One folder per test process, removed when it exits; /tmp keeps the paths short.
+  // Never destroyed, so the atexit handler can still read it.
+  static const auto* const dir = [] {
+    std::string pattern = (std::filesystem::temp_directory_path() / "lightstage-XXXXXX").string();
+    if (::mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
+    auto* path = new std::filesystem::path(pattern);
+    std::atexit([] {
+      std::error_code ignored;
+      std::filesystem::remove_all(socket_dir(), ignored);
+    });
+    return path;
+  }();
+  return *dir;
+}
+
 std::filesystem::path bin_dir() { return std::filesystem::path(LIGHTSTAGE_TEST_BINARY_DIR) / "bin"; }
 
 }  // namespace lightstage::testing

@@ -11,6 +11,10 @@ std::filesystem::path source_dir();
 std::filesystem::path shared_data_dir();
 // A fresh, empty directory under the build tree, unique to the running test.
 std::filesystem::path scratch_dir();
+// A short folder under /tmp for Unix sockets (their paths must stay under 108
+// bytes), private to this test process and removed when it exits.
+std::filesystem::path socket_dir();
+
 // The build directory's bin/ (the programs under test).
 std::filesystem::path bin_dir();
 
