@@ -12,8 +12,8 @@ MessageChannel::MessageChannel(std::unique_ptr<ByteLink> link) : link_(std::move
 void MessageChannel::send(const google::protobuf::MessageLite& message) {
   std::string bytes;
   if (!message.SerializeToString(&bytes)) throw ProtocolError("could not serialize a message");
-  const auto frame = protocol::encode_frame(
-      std::span(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()));
+  const auto frame =
+      protocol::encode_frame(std::span(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()));
   const std::lock_guard lock(send_mutex_);
   link_->write(frame);
 }

@@ -31,8 +31,8 @@ SocketAddress parse_uri(const std::string& uri) {
     SocketAddress a{SocketAddress::Kind::kUnix, {}, {}, uri.substr(5)};
     if (a.path.empty()) fail("link '{}': a unix: URI needs a socket path", uri);
     if (a.path.size() >= sizeof(sockaddr_un::sun_path)) {
-      fail("link '{}': the socket path is {} bytes, longer than the {} a Unix socket allows", uri, a.path.size(),
-           sizeof(sockaddr_un::sun_path) - 1);
+      fail("link '{}': the socket path is {} bytes, longer than the {} a Unix socket allows", uri,
+           a.path.size(), sizeof(sockaddr_un::sun_path) - 1);
     }
     return a;
   }
@@ -76,7 +76,8 @@ AddrInfoPtr resolve(const std::string& uri, const SocketAddress& a, bool passive
   hints.ai_flags = passive ? AI_PASSIVE : 0;
   addrinfo* result = nullptr;
   const int rc = getaddrinfo(a.host.c_str(), a.port.c_str(), &hints, &result);
-  if (rc != 0) throw LinkClosed(fmt::format("link '{}': cannot resolve '{}': {}", uri, a.host, gai_strerror(rc)));
+  if (rc != 0)
+    throw LinkClosed(fmt::format("link '{}': cannot resolve '{}': {}", uri, a.host, gai_strerror(rc)));
   return AddrInfoPtr(result);
 }
 
@@ -211,7 +212,8 @@ std::unique_ptr<ByteLink> connect_socket_link(const std::string& uri, std::chron
   for (;;) {
     const int fd = try_connect(uri, a);
     if (fd >= 0) {
-      const std::string peer = a.kind == SocketAddress::Kind::kTcp ? fmt::format(" (peer {})", peer_name(fd)) : "";
+      const std::string peer =
+          a.kind == SocketAddress::Kind::kTcp ? fmt::format(" (peer {})", peer_name(fd)) : "";
       return std::make_unique<FdLink>(fd, uri + peer);
     }
     const bool retry = errno == ENOENT || errno == ECONNREFUSED || errno == EAGAIN;

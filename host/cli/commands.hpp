@@ -22,5 +22,6 @@ void add_solve(CLI::App& app);
 void add_eval(CLI::App& app);
 void add_rig(CLI::App& app);
 void add_devices(CLI::App& app);
+void add_ctl(CLI::App& app);
 
 }  // namespace lightstage::cli

@@ -1,5 +1,5 @@
-#include "lightstage/common/message_channel.hpp"
 #include "lightstage/common/socket_link.hpp"
+#include "lightstage/common/message_channel.hpp"
 #include "lightstage/proto/controller.pb.h"
 #include "lightstage/testing/paths.hpp"
 
@@ -18,8 +18,8 @@ namespace {
 using std::chrono::milliseconds;
 
 std::string temp_socket(const std::string& name) {
-  return (testing::socket_dir() / (std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
-                                   "-" + name))
+  return (testing::socket_dir() /
+          (std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "-" + name))
       .string();
 }
 

@@ -36,7 +36,8 @@ class FrameDecoder {
 
   void feed(std::span<const std::uint8_t> bytes);
   // The next complete frame, or a report of dropped bytes (the decoder has
-  // already skipped past them and stays usable); nullopt when more bytes are needed.
+  // already skipped past them and stays usable; one report covers a whole run
+  // of bad bytes as far as they are buffered); nullopt when more bytes are needed.
   std::optional<Frame> next();
   std::size_t buffered() const { return buffer_.size() - start_; }
 

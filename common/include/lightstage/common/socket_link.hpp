@@ -15,8 +15,8 @@ namespace lightstage {
 // Connects, waiting up to `timeout` for the peer to accept (retrying while a
 // Unix socket file does not exist yet or a TCP port refuses). Throws LinkClosed
 // naming the URI when it cannot, InputError for a malformed URI.
-std::unique_ptr<ByteLink> connect_socket_link(const std::string& uri,
-                                              std::chrono::milliseconds timeout = std::chrono::milliseconds(0));
+std::unique_ptr<ByteLink> connect_socket_link(
+    const std::string& uri, std::chrono::milliseconds timeout = std::chrono::milliseconds(0));
 
 // Binds and listens. A stale Unix socket file (no one listening) is replaced;
 // a live one is an error. The listener removes its socket file when destroyed.
