@@ -12,7 +12,11 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libgpiod-dev libusb-1.0-0-dev libcamera-dev
   libprotobuf-dev protobuf-compiler zlib1g-dev
+  chromium  # the report viewer's headless-browser test (tests/report)
 )
+# That test drives Chromium from Node (npm ci at build time); Debian's own
+# nodejs + npm only when the machine has no node of its own (e.g. NodeSource).
+command -v npm >/dev/null 2>&1 || packages+=(nodejs npm)
 
 missing=()
 for p in "${packages[@]}"; do

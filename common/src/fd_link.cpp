@@ -6,7 +6,9 @@
 #include <unistd.h>
 
 #include <fcntl.h>
+#include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 
 namespace lightstage {
@@ -42,22 +44,29 @@ std::size_t FdLink::read(std::span<std::uint8_t> buffer, std::chrono::millisecon
 }
 
 void FdLink::write(std::span<const std::uint8_t> bytes) {
+  // A peer that keeps the link open but stops reading must not block the
+  // writer for ever (the controller writes step events from its sequencer).
+  constexpr auto kStall = std::chrono::seconds(10);
   std::size_t done = 0;
+  auto give_up_at = std::chrono::steady_clock::now() + kStall;
   while (done < bytes.size()) {
     if (closed_) throw LinkClosed(fmt::format("{}: link closed", description_));
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(give_up_at - std::chrono::steady_clock::now());
+    pollfd out{fd_, POLLOUT, 0};
+    const int ready = ::poll(&out, 1, static_cast<int>(std::max<std::int64_t>(0, left.count())));
+    if (ready == 0) {
+      throw LinkClosed(fmt::format("{}: the peer has read nothing for {} s", description_, kStall.count()));
+    }
     // MSG_NOSIGNAL where the fd is a socket: a dead peer must not raise SIGPIPE.
-    ssize_t n = ::send(fd_, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL);
+    ssize_t n = ::send(fd_, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL | MSG_DONTWAIT);
     if (n < 0 && errno == ENOTSOCK) n = ::write(fd_, bytes.data() + done, bytes.size() - done);
     if (n < 0) {
-      if (errno == EINTR) continue;
-      if (errno == EAGAIN) {
-        pollfd out{fd_, POLLOUT, 0};
-        ::poll(&out, 1, 100);
-        continue;
-      }
+      if (errno == EINTR || errno == EAGAIN) continue;
       throw LinkClosed(fmt::format("{}: write: {}", description_, std::strerror(errno)));
     }
     done += static_cast<std::size_t>(n);
+    give_up_at = std::chrono::steady_clock::now() + kStall;
   }
 }
 

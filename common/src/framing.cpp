@@ -11,7 +11,8 @@ namespace lightstage::protocol {
 namespace {
 
 std::uint32_t crc32_of(std::span<const std::uint8_t> bytes) {
-  return static_cast<std::uint32_t>(::crc32(::crc32(0L, Z_NULL, 0), bytes.data(), static_cast<uInt>(bytes.size())));
+  return static_cast<std::uint32_t>(
+      ::crc32(::crc32(0L, Z_NULL, 0), bytes.data(), static_cast<uInt>(bytes.size())));
 }
 
 void put_u32(std::vector<std::uint8_t>& out, std::uint32_t v) {
@@ -27,7 +28,8 @@ std::uint32_t get_u32(const std::uint8_t* p) {
 
 std::vector<std::uint8_t> encode_frame(std::span<const std::uint8_t> payload) {
   if (payload.size() > kMaxPayload) {
-    throw Error(fmt::format("frame payload of {} bytes exceeds the {} byte limit", payload.size(), kMaxPayload));
+    throw Error(
+        fmt::format("frame payload of {} bytes exceeds the {} byte limit", payload.size(), kMaxPayload));
   }
   std::vector<std::uint8_t> out;
   out.reserve(kHeaderSize + payload.size() + kTrailerSize);
@@ -53,34 +55,87 @@ void FrameDecoder::compact() {
 }
 
 std::optional<FrameDecoder::Frame> FrameDecoder::next() {
+  // A run of bad bytes (garbage, a bogus header, a frame failing its CRC, more
+  // garbage...) is skipped in one go and reported once, so a peer that answers
+  // every report with an error reply sends one reply per damaged frame, not one
+  // per byte of it. A good frame right after the run waits for the next call.
+  std::size_t dropped = 0;
+  std::string reason;  // why the first of the dropped bytes went
+  const auto drop = [&](std::size_t count, std::string why) {
+    if (dropped == 0) reason = std::move(why);
+    dropped += count;
+    advance(count);
+  };
+  const auto report = [&]() -> std::optional<Frame> {
+    if (dropped == 0) return std::nullopt;
+    return Frame{{}, fmt::format("dropped {} byte(s): {}", dropped, reason)};
+  };
+  for (;;) {
+    const std::uint8_t* data = buffer_.data() + start_;
+    const std::size_t size = buffer_.size() - start_;
+    if (size == 0) return report();
+    // Resynchronise: skip to the next magic (a lone 'L' at the end may be one).
+    std::size_t skip = 0;
+    while (skip < size && !(data[skip] == kMagic0 && (skip + 1 == size || data[skip + 1] == kMagic1))) ++skip;
+    if (skip > 0) {
+      drop(skip, "garbage outside a frame");
+      continue;
+    }
+    if (size < kHeaderSize) return report();
+    const std::uint32_t length = get_u32(data + 2);
+    if (length > kMaxPayload) {
+      // Not a real frame start: look for the next magic.
+      drop(1, fmt::format("frame length {} exceeds the {} byte limit", length, kMaxPayload));
+      continue;
+    }
+    const std::size_t total = kHeaderSize + length + kTrailerSize;
+    if (size < total) {
+      if (const auto later = later_complete_frame()) {
+        drop(*later, fmt::format("a frame of {} bytes was cut short by the next frame", length));
+        continue;
+      }
+      return report();
+    }
+    const std::span<const std::uint8_t> payload(data + kHeaderSize, length);
+    const std::uint32_t expected = get_u32(data + kHeaderSize + length);
+    const std::uint32_t actual = crc32_of(payload);
+    if (expected != actual) {
+      // The header may itself be corrupt: resynchronise from the next byte.
+      drop(1,
+           fmt::format("frame of {} bytes failed its CRC (0x{:08x} != 0x{:08x})", length, actual, expected));
+      continue;
+    }
+    if (dropped > 0) return report();
+    Frame frame{std::vector<std::uint8_t>(payload.begin(), payload.end()), {}};
+    advance(total);
+    return frame;
+  }
+}
+
+void FrameDecoder::advance(std::size_t count) {
+  start_ += count;
+  lookahead_ = 0;
+}
+
+std::optional<std::size_t> FrameDecoder::later_complete_frame() {
   const std::uint8_t* data = buffer_.data() + start_;
   const std::size_t size = buffer_.size() - start_;
-  if (size == 0) return std::nullopt;
-  // Resynchronise: skip to the next magic.
-  std::size_t skip = 0;
-  while (skip < size && !(data[skip] == kMagic0 && (skip + 1 == size || data[skip + 1] == kMagic1))) ++skip;
-  if (skip > 0) {
-    start_ += skip;
-    return Frame{{}, fmt::format("dropped {} byte(s) of garbage before a frame", skip)};
+  // Candidates start after our magic. Everything before `at` is settled:
+  // no magic there, or a frame that is complete and failed its CRC. The scan
+  // stops at the first candidate still incomplete, to look at it again later.
+  std::size_t at = std::max<std::size_t>(lookahead_, 1);
+  for (; at + 1 < size; ++at) {
+    if (data[at] != kMagic0 || data[at + 1] != kMagic1) continue;
+    if (size - at < kHeaderSize) break;
+    const std::uint32_t length = get_u32(data + at + 2);
+    if (length > kMaxPayload) continue;
+    if (size - at < kHeaderSize + length + kTrailerSize) break;
+    if (crc32_of(std::span(data + at + kHeaderSize, length)) == get_u32(data + at + kHeaderSize + length)) {
+      return at;
+    }
   }
-  if (size < kHeaderSize) return std::nullopt;
-  const std::uint32_t length = get_u32(data + 2);
-  if (length > kMaxPayload) {
-    start_ += 1;  // not a real frame start: look for the next magic
-    return Frame{{}, fmt::format("frame length {} exceeds the {} byte limit", length, kMaxPayload)};
-  }
-  const std::size_t total = kHeaderSize + length + kTrailerSize;
-  if (size < total) return std::nullopt;
-  const std::span<const std::uint8_t> payload(data + kHeaderSize, length);
-  const std::uint32_t expected = get_u32(data + kHeaderSize + length);
-  const std::uint32_t actual = crc32_of(payload);
-  if (expected != actual) {
-    start_ += 1;  // the header may itself be corrupt: resynchronise from the next byte
-    return Frame{{}, fmt::format("frame of {} bytes failed its CRC (0x{:08x} != 0x{:08x})", length, actual, expected)};
-  }
-  Frame frame{std::vector<std::uint8_t>(payload.begin(), payload.end()), {}};
-  start_ += total;
-  return frame;
+  lookahead_ = at;
+  return std::nullopt;
 }
 
 }  // namespace lightstage::protocol

@@ -50,6 +50,19 @@ SafetyVerdict LedSafety::check(int led_id, double start_us, double duration_us) 
   return {true, {}};
 }
 
+double LedSafety::allowed_on_us(int led_id, double start_us) const {
+  const LedLimits& limits = state(led_id).limits;
+  if (!check(led_id, start_us, 0).allowed) return 0;
+  if (check(led_id, start_us, limits.max_on_us).allowed) return limits.max_on_us;
+  double allowed = 0;
+  double refused = limits.max_on_us;
+  for (int i = 0; i < 48 && refused - allowed > 1e-3; ++i) {
+    const double middle = 0.5 * (allowed + refused);
+    (check(led_id, start_us, middle).allowed ? allowed : refused) = middle;
+  }
+  return allowed;
+}
+
 void LedSafety::record(int led_id, double on_us, double off_us) {
   auto it = leds_.find(led_id);
   if (it == leds_.end()) fail("no LED with id {} in the rig", led_id);

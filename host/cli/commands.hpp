@@ -19,9 +19,17 @@ const std::vector<Command>& commands();
 void add_demo(CLI::App& app);
 void add_simulate(CLI::App& app);
 void add_solve(CLI::App& app);
+void add_bench(CLI::App& app);
+void add_reflectance(CLI::App& app);
+void add_relight(CLI::App& app);
 void add_eval(CLI::App& app);
 void add_rig(CLI::App& app);
 void add_devices(CLI::App& app);
 void add_ctl(CLI::App& app);
+void add_capture(CLI::App& app);
+void add_camera(CLI::App& app);
+void add_calibrate(CLI::App& app);
+void add_report(CLI::App& app);
+void add_integrate(CLI::App& app);
 
 }  // namespace lightstage::cli

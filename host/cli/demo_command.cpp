@@ -45,6 +45,8 @@ void add_demo(CLI::App& app) {
                summary["pixels_solved"].get<std::size_t>(), summary["pixels_in_mask"].get<std::size_t>(),
                l2.shadow_threshold, summary["seconds"].get<double>(), (out / "result").string());
     if (report.error) print_error_stats(*report.error);
+    if (std::filesystem::exists(out / "result" / "report.html"))
+      fmt::print("report (open in a browser) -> {}\n", (out / "result" / "report.html").string());
   });
 }
 

@@ -1,6 +1,7 @@
 #include "options.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "methods.hpp"
 #include "lightstage/sim/scene_file.hpp"
 
 #include <fmt/format.h>
@@ -57,20 +58,49 @@ void add_simulate_flags(CLI::App& sub, SimulateArgs& args) {
 }
 
 void add_solve_flags(CLI::App& sub, SolveArgs& args) {
-  sub.add_option("--method", args.method, "solver: l2 (Lambertian least squares)")
-      ->check(CLI::IsMember({"l2"}))
+  std::string methods;
+  for (const auto& method : solve_methods()) methods += fmt::format("\n  {}: {}", method.name, method.help);
+  sub.add_option("--method", args.method, "solver (docs/solvers.md):" + methods)
+      ->check(CLI::IsMember(solve_method_names()))
       ->capture_default_str();
-  sub.add_option("--shadow-threshold", args.l2.shadow_threshold,
+  sub.add_option("--shadow-threshold", args.shadow_threshold,
                  "drop observations at or below T (values after division by full scale and light intensity); "
-                 "-1 keeps all")
+                 "l2: -1 (default) keeps all; other methods: default 1e-6, ~0.02 suits real captures");
+  sub.add_option("--t-low", args.t_low,
+                 "keep the lowest fraction F of each pixel's remaining observations (default: l2 1, robust "
+                 "0.5, bi-polynomial and auto 0.25)");
+  sub.add_option("--min-observations", args.min_observations,
+                 "reject pixels with fewer observations (l2, robust, monotonic)");
+  sub.add_option("--max-iterations", args.max_iterations, "bi-polynomial alternations (default 100)");
+  sub.add_option("--estimator", args.estimator, "robust: irls-l1, ransac or none")
+      ->check(CLI::IsMember({"irls-l1", "ransac", "none"}))
       ->capture_default_str();
-  sub.add_option("--t-low", args.l2.t_low,
-                 "keep the lowest fraction F of each pixel's remaining observations")
+  sub.add_option("--azimuth-from", args.azimuth_from,
+                 "monotonic: azimuth from isotropy (Alldrin-Kriegman) or from another method's normals "
+                 "(l2, robust, bilinear, biquadratic, bicubic, ...)")
       ->capture_default_str();
-  sub.add_option("--min-observations", args.l2.min_observations, "reject pixels with fewer observations")
+  sub.add_option("--gamma", args.monotonic.gamma, "monotonic: y' <- y'^gamma before the cost")
       ->capture_default_str();
   sub.add_flag("--no-clamp", args.no_clamp, "do not clamp normalised values to <= 1");
-  sub.add_option("--threads", args.l2.threads, "solver threads (0 = all cores)")->capture_default_str();
+  sub.add_option("--threads", args.threads, "solver threads (0 = all cores)");
+  add_shape_prior_flags(sub, args.shape_prior);
+}
+
+void SolveArgs::resolve() {
+  radiometry.clamp_to_one = !no_clamp;
+  robust.estimator = parse_robust_estimator(estimator);
+  if (azimuth_from != "isotropy") find_solve_method(azimuth_from);  // names --method's list when unknown
+  auto& a = automatic;
+  if (shadow_threshold) {
+    l2.shadow_threshold = *shadow_threshold;
+    robust.shadow_threshold = monotonic.shadow_threshold = bipolynomial.shadow_threshold = *shadow_threshold;
+    a.monotonic.shadow_threshold = a.bipolynomial.shadow_threshold = *shadow_threshold;
+  }
+  if (t_low) l2.t_low = robust.t_low = bipolynomial.t_low = a.bipolynomial.t_low = *t_low;
+  if (min_observations) l2.min_observations = robust.min_observations = monotonic.min_observations = *min_observations;
+  if (max_iterations) bipolynomial.max_iterations = a.bipolynomial.max_iterations = *max_iterations;
+  a.monotonic.gamma = monotonic.gamma;
+  if (threads) l2.threads = robust.threads = monotonic.threads = bipolynomial.threads = a.threads = *threads;
 }
 
 }  // namespace lightstage::cli

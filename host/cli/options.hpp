@@ -3,12 +3,18 @@
 // takes them.
 
 #include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/solvers/auto.hpp"
+#include "lightstage/host/solvers/bipolynomial.hpp"
 #include "lightstage/host/solvers/lambertian.hpp"
+#include "lightstage/host/solvers/monotonic.hpp"
+#include "lightstage/host/solvers/robust.hpp"
 #include "lightstage/sim/simulate.hpp"
+#include "shape_prior_args.hpp"
 
 #include <CLI/CLI.hpp>
 
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace lightstage::cli {
@@ -29,9 +35,19 @@ void add_simulate_flags(CLI::App& sub, SimulateArgs& args);
 struct SolveArgs {
   std::string method = "l2";
   L2Options l2;
+  RobustOptions robust;
+  MonotonicOptions monotonic;
+  BiPolynomialOptions bipolynomial;
+  AutoOptions automatic;
+  ShapePriorArgs shape_prior;  // --method shape-prior (shape_prior_args.hpp)
+  std::string estimator = "irls-l1";     // --estimator, robust
+  std::string azimuth_from = "isotropy";  // --azimuth-from, monotonic
+  // Flags every method shares: when given, resolve() copies them into each method's options.
+  std::optional<double> shadow_threshold, t_low;
+  std::optional<int> min_observations, threads, max_iterations;
   RadiometryOptions radiometry;
   bool no_clamp = false;
-  void resolve() { radiometry.clamp_to_one = !no_clamp; }
+  void resolve();
 };
 void add_solve_flags(CLI::App& sub, SolveArgs& args);
 

@@ -1,5 +1,6 @@
 // `lightstage solve`: normals and albedo from a stack folder.
 #include "commands.hpp"
+#include "methods.hpp"
 #include "options.hpp"
 #include "steps.hpp"
 
@@ -13,6 +14,7 @@ void add_solve(CLI::App& app) {
     std::string out;
     bool json = false;
     SolveArgs solve;
+    SolveCalibration calibration;
   };
   auto args = std::make_shared<Args>();
   CLI::App* sub = app.add_subcommand(
@@ -29,9 +31,18 @@ void add_solve(CLI::App& app) {
   sub->add_option("--out", args->out, "output folder")->required();
   sub->add_flag("--json", args->json, "print summary.json on stdout");
   add_solve_flags(*sub, args->solve);
+  sub->add_option("--calibration", args->calibration.file,
+                  "light calibration (calibration.json or .lp from `calibrate lights`): its directions and "
+                  "intensities replace the stack's, its LED positions give near lights");
+  sub->add_flag("--distant-lights", args->calibration.distant,
+                "with --calibration: ignore LED positions (one direction per light for every pixel)");
   sub->callback([args] {
     args->solve.resolve();
-    const auto report = solve_folder(args->input, args->solve.radiometry, args->solve.l2, args->out);
+    const SolveMethod& method = find_solve_method(args->solve.method);
+    const auto report = solve_folder(
+        args->input, args->solve.radiometry,
+        [&](const Observations& observations) { return method.solve(observations, args->solve); }, args->out,
+        args->calibration);
     if (args->json) {
       fmt::print("{}\n", report.summary.dump());
     } else if (report.error) {

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <functional>
 #include <optional>
 
 namespace lightstage::cli {
@@ -30,6 +31,24 @@ struct SolveReport {
 // angular error is measured and recorded in summary.json too.
 SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOptions& radiometry,
                          const L2Options& options, const std::filesystem::path& out);
+
+// A light calibration to apply before solving (docs/calibration.md): its
+// directions and intensities replace the stack's; its LED positions give
+// near lights unless `distant` is set.
+struct SolveCalibration {
+  std::filesystem::path file;  // calibration.json or .lp; empty = none
+  bool distant = false;
+};
+
+// The same with any solver (e.g. a method of the --method table, methods.hpp).
+using SolverFunction = std::function<SolveResult(const Observations&)>;
+SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOptions& radiometry,
+                         const SolverFunction& solver, const std::filesystem::path& out,
+                         const SolveCalibration& calibration = {});
+
+// Writes RESULT_DIR/report.html (report/report.hpp) for a solve of the stack
+// in `input`; a failure is logged as a warning, not thrown.
+void write_result_report(const std::filesystem::path& result_dir, const std::filesystem::path& input);
 
 // Prints a one-line human summary of angular error statistics.
 void print_error_stats(const AngularErrorStats& stats);

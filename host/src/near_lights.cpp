@@ -1,5 +1,7 @@
 #include "lightstage/host/near_lights.hpp"
 
+#include <cmath>
+
 namespace lightstage {
 
 void near_light_directions(const NearLights& near, std::size_t pixel, Eigen::MatrixX3d& directions,
@@ -15,6 +17,20 @@ void near_light_directions(const NearLights& near, std::size_t pixel, Eigen::Mat
     directions.row(j) = to_led / d;
     gains(j) = (d0 * d0) / (d * d);
   }
+}
+
+Eigen::MatrixX3d points_on_plane(const std::vector<cv::Point>& pixels, const PixelRay& ray,
+                                 double plane_z_mm) {
+  Eigen::MatrixX3d points(static_cast<Eigen::Index>(pixels.size()), 3);
+  for (std::size_t p = 0; p < pixels.size(); ++p) {
+    Eigen::Vector3d origin, direction;
+    ray(Eigen::Vector2d(pixels[p].x + 0.5, pixels[p].y + 0.5), &origin, &direction);
+    // A ray parallel to the plane (never for a camera looking at the object) keeps its origin's x, y.
+    const double t = std::abs(direction.z()) > 1e-12 ? (plane_z_mm - origin.z()) / direction.z() : 0.0;
+    points.row(static_cast<Eigen::Index>(p)) = (origin + t * direction).transpose();
+    if (std::abs(direction.z()) <= 1e-12) points(static_cast<Eigen::Index>(p), 2) = plane_z_mm;
+  }
+  return points;
 }
 
 }  // namespace lightstage

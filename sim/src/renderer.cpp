@@ -58,6 +58,41 @@ Renderer::Renderer(const Scene& scene, const Camera& camera, const Vec3& object_
       }
     }
   });
+  if (mirror_material && scene_.environment_radiance > 0) coverage_ = silhouette_coverage();
+}
+
+cv::Mat Renderer::silhouette_coverage() const {
+  const int w = camera_.width, h = camera_.height;
+  constexpr int kSamples = 8;
+  cv::Mat corners(h + 1, w + 1, CV_8UC1, cv::Scalar::all(0));
+  parallel_for(h + 1, threads_, [&](int r) {
+    for (int c = 0; c <= w; ++c) {
+      Vec3 view;
+      corners.at<std::uint8_t>(r, c) = trace(c, r, &view) ? 1 : 0;
+    }
+  });
+  cv::Mat coverage(h, w, CV_64FC1, cv::Scalar::all(0));
+  parallel_for(h, threads_, [&](int r) {
+    for (int c = 0; c < w; ++c) {
+      const int hits = corners.at<std::uint8_t>(r, c) + corners.at<std::uint8_t>(r, c + 1) +
+                       corners.at<std::uint8_t>(r + 1, c) + corners.at<std::uint8_t>(r + 1, c + 1) +
+                       (mask_.at<std::uint8_t>(r, c) != 0 ? 1 : 0);
+      if (hits == 0) continue;
+      if (hits == 5) {
+        coverage.at<double>(r, c) = 1.0;
+        continue;
+      }
+      int inside = 0;
+      for (int j = 0; j < kSamples; ++j) {
+        for (int i = 0; i < kSamples; ++i) {
+          Vec3 view;
+          if (trace(c + (i + 0.5) / kSamples, r + (j + 0.5) / kSamples, &view)) ++inside;
+        }
+      }
+      coverage.at<double>(r, c) = static_cast<double>(inside) / (kSamples * kSamples);
+    }
+  });
+  return coverage;
 }
 
 std::optional<Hit> Renderer::trace(double u, double v, Vec3* view) const {
@@ -204,12 +239,27 @@ cv::Mat Renderer::render(const std::vector<LightSource>& lights) const {
       row[c] = sum;
     }
   });
+  if (mirror_material && !coverage_.empty()) {
+    double on = 0;
+    for (const auto& light : lights) on += light.intensity;
+    out += coverage_ * (on * scene_.environment_radiance * m.mirror_reflectance());
+  }
   if (mirror_material) {
     for (std::size_t k = 0; k < lights.size(); ++k) {
       if (lights[k].intensity == 0) continue;
       add_mirror(leds[k], lights[k].intensity * scene_.led_radiance * m.mirror_reflectance(), out);
     }
   }
+  return out;
+}
+
+cv::Mat Renderer::albedo_map() const {
+  cv::Mat out = cv::Mat::zeros(camera_.height, camera_.width, CV_32FC1);
+  for (int r = 0; r < camera_.height; ++r)
+    for (int c = 0; c < camera_.width; ++c) {
+      const Pixel& px = pixels_[static_cast<std::size_t>(r) * camera_.width + c];
+      if (px.hit) out.at<float>(r, c) = static_cast<float>(px.albedo);
+    }
   return out;
 }
 

@@ -13,6 +13,7 @@ nlohmann::json Scene::describe() const {
                    {"led_radius_mm", led_radius_mm},
                    {"led_radiance", led_radiance},
                    {"highlight_blur_px", highlight_blur_px},
+                   {"environment_radiance", environment_radiance},
                    {"cast_shadows", cast_shadows}};
   return j;
 }

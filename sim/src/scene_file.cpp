@@ -155,7 +155,7 @@ CameraOverrides parse_camera(const Field& f) {
 Scene parse_document(const Field& root, const std::string& source) {
   if (!root.is_map()) root.error("a scene file is a YAML mapping");
   root.only_keys({"name", "object", "material", "albedo", "camera", "led_radius_mm", "led_radiance",
-                  "highlight_blur_px", "cast_shadows"});
+                  "highlight_blur_px", "cast_shadows", "environment_radiance"});
   Scene scene;
   scene.name = root.has("name") ? root["name"].text() : source;
   scene.shape = parse_object(root["object"]);
@@ -174,6 +174,7 @@ Scene parse_document(const Field& root, const std::string& source) {
     if (scene.highlight_blur_px > 20) root["highlight_blur_px"].error("must be at most 20 pixels");
   }
   if (root.has("cast_shadows")) scene.cast_shadows = root["cast_shadows"].boolean();
+  if (root.has("environment_radiance")) scene.environment_radiance = root["environment_radiance"].non_negative();
   return scene;
 }
 
@@ -188,6 +189,16 @@ albedo: 1.0
       {"chrome-sphere", R"(name: chrome-sphere
 object: {type: sphere, radius_mm: 40}
 material: chrome
+)"},
+      {"chrome-probe", R"(name: chrome-probe
+object: {type: sphere, radius_mm: 40}
+material: chrome
+environment_radiance: 0.05
+)"},
+      {"white-target", R"(name: white-target
+object: {type: bumps, size_mm: 100, bumps: []}
+material: lambert
+albedo: 0.9
 )"},
       {"matte-sphere", R"(name: matte-sphere
 object: {type: sphere, radius_mm: 40}

@@ -3,10 +3,12 @@
 #include "lightstage/common/socket_link.hpp"
 #include "lightstage/testing/paths.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <csignal>
 #include <fstream>
 #include <limits>
@@ -33,6 +35,9 @@ Timeline Timeline::load(const std::filesystem::path& file) {
     if (j.contains("via")) e.via = j.at("via").get<std::string>();
     timeline.entries_.push_back(std::move(e));
   }
+  // The sim appends in the order it saw changes; lines interleave, so order by time.
+  std::stable_sort(timeline.entries_.begin(), timeline.entries_.end(),
+                   [](const TimelineEntry& a, const TimelineEntry& b) { return a.t_ns < b.t_ns; });
   return timeline;
 }
 
@@ -70,25 +75,38 @@ SimulatedDome::SimulatedDome(DomeOptions options) : options_(std::move(options))
   sim_socket_ = socket_dir() / (std::to_string(reinterpret_cast<std::uintptr_t>(this)) + "-sim.sock");
   controller_socket_ =
       socket_dir() / (std::to_string(reinterpret_cast<std::uintptr_t>(this)) + "-domed.sock");
+  camera_socket_ = socket_dir() / (std::to_string(reinterpret_cast<std::uintptr_t>(this)) + "-camera.sock");
   timeline_file_ = dir_ / "timeline.jsonl";
 
   std::vector<std::string> sim_args = {"--rig",      options_.rig.string(),
                                        "--listen",   "unix:" + sim_socket_.string(),
                                        "--timeline", timeline_file_.string()};
+  if (options_.camera) {
+    sim_args.push_back("--camera");
+    sim_args.push_back("unix:" + camera_socket_.string());
+  }
   sim_args.insert(sim_args.end(), options_.sim_args.begin(), options_.sim_args.end());
   sim_ = std::make_unique<ChildProcess>(bin_dir() / "lightstage-sim", sim_args, dir_ / "sim.log");
   if (!sim_->wait_for_output("listening on", kStartTimeout)) {
     throw std::runtime_error("lightstage-sim did not start:\n" + sim_->output());
   }
+  start_firmware();
+}
+
+void SimulatedDome::start_firmware() {
   std::vector<std::string> fw_args = {
       "--rig", options_.rig.string(), "--gpio", "sim:" + sim_socket_.string(), "--listen", controller_uri()};
   fw_args.insert(fw_args.end(), options_.firmware_args.begin(), options_.firmware_args.end());
-  firmware_ = std::make_unique<ChildProcess>(bin_dir() / "lightstage-domed", fw_args, dir_ / "domed.log");
+  firmware_.reset();
+  firmware_ = std::make_unique<ChildProcess>(bin_dir() / "lightstage-domed", fw_args,
+                                             dir_ / fmt::format("domed-{}.log", ++firmware_starts_));
   if (!firmware_->wait_for_output("listening on", kStartTimeout)) {
     throw std::runtime_error("lightstage-domed did not start:\n" + firmware_->output() + "\nsim:\n" +
                              sim_->output());
   }
 }
+
+void SimulatedDome::restart_firmware() { start_firmware(); }
 
 SimulatedDome::~SimulatedDome() {
   if (::testing::Test::HasFailure()) std::fprintf(stderr, "%s\n", logs().c_str());

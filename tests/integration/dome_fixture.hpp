@@ -47,6 +47,7 @@ struct DomeOptions {
   std::filesystem::path rig;               // default: hw/rigs/sim-dome.yaml
   std::vector<std::string> sim_args;       // extra lightstage-sim flags (strobe, faults)
   std::vector<std::string> firmware_args;  // extra lightstage-domed flags
+  bool camera = false;                     // serve the virtual camera too (sim_args set the scene)
 };
 
 class SimulatedDome {
@@ -55,6 +56,9 @@ class SimulatedDome {
   ~SimulatedDome();
 
   std::string controller_uri() const { return "unix:" + controller_socket_.string(); }
+  std::string camera_uri() const { return "sim:" + camera_socket_.string(); }
+  // Starts lightstage-domed again (after a test killed it), on the same sockets.
+  void restart_firmware();
   std::unique_ptr<ControllerClient> connect(ControllerClientOptions options = {}) const;
   ChildProcess& sim() { return *sim_; }
   ChildProcess& firmware() { return *firmware_; }
@@ -66,7 +70,10 @@ class SimulatedDome {
 
  private:
   DomeOptions options_;
-  std::filesystem::path dir_, sim_socket_, controller_socket_, timeline_file_;
+  void start_firmware();
+
+  std::filesystem::path dir_, sim_socket_, controller_socket_, camera_socket_, timeline_file_;
+  int firmware_starts_ = 0;
   std::unique_ptr<ChildProcess> sim_, firmware_;
 };
 

@@ -58,16 +58,19 @@ int main(int argc, char** argv) {
     options.closed_loop = closed;
     std::vector<proto::StepEvent> all;
     for (int r = 0; r < runs; ++r) {
-      const SequenceRun run = client->run_sequence(one_led_per_step(ids, options, static_cast<std::uint32_t>(r + 1)));
+      const SequenceRun run =
+          client->run_sequence(one_led_per_step(ids, options, static_cast<std::uint32_t>(r + 1)));
       if (!run.ok()) {
-        fmt::print(stderr, "run {} ended {}: {}\n", r, proto::Outcome_Name(run.done.outcome()), run.done.detail());
+        fmt::print(stderr, "run {} ended {}: {}\n", r, proto::Outcome_Name(run.done.outcome()),
+                   run.done.detail());
         return 1;
       }
       all.insert(all.end(), run.steps.begin(), run.steps.end());
     }
     const double plan_ms = (options.settle_us + options.exposure_us + options.gap_us) / 1e3 +
                            (closed ? 0.2 : 0.0);  // closed loop waits for the strobe delay too
-    print_row(closed ? "sequencer, closed loop (strobe)" : "sequencer, open loop", lateness_stats(all), plan_ms);
+    print_row(closed ? "sequencer, closed loop (strobe)" : "sequencer, open loop", lateness_stats(all),
+              plan_ms);
   }
   const LatenessStats reference = bare_sleep_lateness(96 * runs, 1'000'000);
   print_row("reference: bare clock_nanosleep", reference, 1.0);

@@ -68,6 +68,26 @@ nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const Solve
                       {"albedo", "albedo.png"},
                       {"albedo_float", "albedo.pfm"},
                       {"residual", "residual.pfm"}};
+  // Optional per-pixel outputs: confidence and a per-pixel reflectance model (one PFM per coefficient).
+  if (!result.confidence.empty()) {
+    write_pfm(dir / "confidence.pfm", result.confidence);
+    summary["files"]["confidence"] = "confidence.pfm";
+  }
+  if (!result.coefficients.empty()) {
+    std::vector<cv::Mat> planes;
+    cv::split(result.coefficients, planes);
+    nlohmann::json names = nlohmann::json::array();
+    const auto& terms = result.reflectance.is_object() ? result.reflectance.value("terms", nlohmann::json::array())
+                                                       : nlohmann::json::array();
+    for (std::size_t c = 0; c < planes.size(); ++c) {
+      const std::string term = c < terms.size() ? terms[c].get<std::string>() : std::to_string(c);
+      const std::string name = "brdf_" + term + ".pfm";
+      write_pfm(dir / name, planes[c]);
+      names.push_back(name);
+    }
+    summary["files"]["brdf"] = names;
+  }
+  if (!result.reflectance.is_null()) summary["reflectance"] = result.reflectance;
   for (const auto& [key, value] : extra.items()) summary[key] = value;
   util::write_text_atomic(dir / "summary.json", summary.dump(2) + "\n");
   return summary;

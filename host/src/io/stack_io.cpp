@@ -160,7 +160,8 @@ ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
   return stack;
 }
 
-void write_stack(const fs::path& dir, const ImageStack& stack, const nlohmann::json& extra_manifest) {
+void write_stack(const fs::path& dir, const ImageStack& stack, const nlohmann::json& extra_manifest,
+                 bool write_images) {
   if (stack.frames.empty()) fail("{}: cannot write a stack without frames", dir.string());
   const cv::Mat& first = stack.frames.front().image;
   StackFiles files;
@@ -199,7 +200,7 @@ void write_stack(const fs::path& dir, const ImageStack& stack, const nlohmann::j
   fs::create_directories(dir, error);
   if (error) fail("{}: cannot create folder: {}", dir.string(), error.message());
 
-  util::parallel_chunks(stack.frames.size(), 0, [&](std::size_t, std::size_t begin, std::size_t end) {
+  util::parallel_chunks(write_images ? stack.frames.size() : 0, 0, [&](std::size_t, std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       const fs::path path = dir / files.frames[i];
       if (stack.frames[i].image.depth() == CV_32F) {

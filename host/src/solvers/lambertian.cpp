@@ -82,6 +82,9 @@ Counters solve_all(const Observations& obs, const L2Options& options, Maps& maps
 }
 
 // Per-pixel selection: shadows dropped, the lowest t_low kept, 3×3 normal equations.
+// With near lights each pixel has its own light directions, and its values
+// are divided by the falloff gains before the fit (the shadow threshold
+// still applies to the observed values).
 Counters solve_selected(const Observations& obs, const L2Options& options, Maps& maps) {
   const Eigen::Index images = static_cast<Eigen::Index>(obs.image_count());
   const std::size_t pixels = obs.pixel_count();
@@ -90,11 +93,21 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
     Counters& counters = per_chunk[chunk];
     std::vector<Eigen::Index> kept;
     kept.reserve(static_cast<std::size_t>(images));
+    Eigen::MatrixX3d near_directions;
+    Eigen::VectorXd near_gains;
+    Eigen::VectorXf corrected(images);
     for (std::size_t p = begin; p < end; ++p) {
-      const auto row = obs.intensities.row(static_cast<Eigen::Index>(p));
+      const auto observed = obs.intensities.row(static_cast<Eigen::Index>(p));
+      corrected = observed.transpose();
+      if (obs.near) {
+        near_light_directions(*obs.near, p, near_directions, near_gains);
+        corrected.array() /= near_gains.cast<float>().array();
+      }
+      const Eigen::MatrixX3d& lights = obs.near ? near_directions : obs.lights;
+      const auto& row = corrected;
       kept.clear();
       for (Eigen::Index j = 0; j < images; ++j) {
-        const float value = row(j);
+        const float value = observed(j);
         if (!std::isfinite(value)) continue;
         if (options.shadow_threshold >= 0 && static_cast<double>(value) <= options.shadow_threshold) continue;
         kept.push_back(j);
@@ -113,7 +126,7 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
       Eigen::Matrix3d gram = Eigen::Matrix3d::Zero();
       Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
       for (const Eigen::Index j : kept) {
-        const Eigen::Vector3d l = obs.lights.row(j).transpose();
+        const Eigen::Vector3d l = lights.row(j).transpose();
         gram += l * l.transpose();
         rhs += static_cast<double>(row(j)) * l;
       }
@@ -128,7 +141,7 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
       const Eigen::Vector3d s = v * (v.transpose() * rhs).cwiseQuotient(lambda);
       double squared = 0;
       for (const Eigen::Index j : kept) {
-        const double r = obs.lights.row(j).dot(s) - static_cast<double>(row(j));
+        const double r = lights.row(j).dot(s) - static_cast<double>(row(j));
         squared += r * r;
       }
       if (store(s, std::sqrt(squared / static_cast<double>(kept.size())), obs.pixels[p], maps)) {
@@ -176,7 +189,15 @@ SolveResult solve_lambertian(const Observations& observations, const L2Options& 
   }
   Maps maps{cv::Mat(size, CV_32FC3, cv::Scalar::all(0)), cv::Mat(size, CV_32FC1, cv::Scalar::all(0)),
             cv::Mat(size, CV_32FC1, cv::Scalar::all(0)), cv::Mat(size, CV_8UC1, cv::Scalar::all(0))};
-  const bool all = options.shadow_threshold < 0 && options.t_low >= 1.0;
+  if (observations.near &&
+      (observations.near->image_count() != observations.image_count() ||
+       static_cast<std::size_t>(observations.near->points_mm.rows()) != observations.pixel_count())) {
+    fail("solve_lambertian: near lights for {} images x {} pixels, observations have {} x {}",
+         observations.near->image_count(), observations.near->points_mm.rows(), observations.image_count(),
+         observations.pixel_count());
+  }
+  // Near lights: every pixel has its own lights, so no shared pseudo-inverse.
+  const bool all = options.shadow_threshold < 0 && options.t_low >= 1.0 && !observations.near;
   const Counters counters =
       all ? solve_all(observations, options, maps) : solve_selected(observations, options, maps);
 
@@ -195,8 +216,10 @@ SolveResult solve_lambertian(const Observations& observations, const L2Options& 
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   summary.message =
       fmt::format("l2 ({}): solved {} of {} pixels ({} too few observations, {} degenerate)",
-                  all ? "all observations, one pseudo-inverse" : "per-pixel selection", summary.pixels_solved,
-                  summary.pixels_in_mask, summary.pixels_rejected_too_few_observations,
+                  all                 ? "all observations, one pseudo-inverse"
+                  : observations.near ? "per-pixel near lights"
+                                      : "per-pixel selection",
+                  summary.pixels_solved, summary.pixels_in_mask, summary.pixels_rejected_too_few_observations,
                   summary.pixels_rejected_degenerate);
   return result;
 }

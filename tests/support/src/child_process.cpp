@@ -51,8 +51,10 @@ bool ChildProcess::wait_for_output(const std::string& text, std::chrono::millise
   for (;;) {
     if (output().find(text) != std::string::npos) return true;
     if (std::chrono::steady_clock::now() >= deadline) return false;
-    int status = 0;
-    if (exit_code_ || ::waitpid(pid_, &status, WNOHANG | WNOWAIT) == pid_) {
+    // Exited? (WNOWAIT leaves it to wait() to reap.)
+    siginfo_t info{};
+    if (exit_code_ || (::waitid(P_PID, static_cast<id_t>(pid_), &info, WEXITED | WNOHANG | WNOWAIT) == 0 &&
+                       info.si_pid == pid_)) {
       return output().find(text) != std::string::npos;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(10));

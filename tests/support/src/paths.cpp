@@ -25,7 +25,13 @@ std::filesystem::path scratch_dir() {
     if (c == '/') c = '_';
   }
   const auto dir = std::filesystem::path(LIGHTSTAGE_TEST_BINARY_DIR) / "scratch" / name;
-  std::filesystem::remove_all(dir);
+  // Emptied on the first call of each test only: a test (and the fixtures it
+  // starts) may ask again and must find what it wrote.
+  static std::string prepared;
+  if (prepared != name) {
+    std::filesystem::remove_all(dir);
+    prepared = name;
+  }
   std::filesystem::create_directories(dir);
   return dir;
 }

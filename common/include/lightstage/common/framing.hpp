@@ -38,14 +38,23 @@ class FrameDecoder {
   // The next complete frame, or a report of dropped bytes (the decoder has
   // already skipped past them and stays usable; one report covers a whole run
   // of bad bytes as far as they are buffered); nullopt when more bytes are needed.
+  // A frame still incomplete when a complete, CRC-valid frame starts after its
+  // header is taken as cut short (a sender that died mid-frame) and dropped,
+  // so a stale partial frame cannot swallow the next session's messages.
   std::optional<Frame> next();
   std::size_t buffered() const { return buffer_.size() - start_; }
 
  private:
   void compact();
+  void advance(std::size_t count);
+  // Offset (from start_) of a complete, CRC-valid frame after the frame start at start_.
+  std::optional<std::size_t> later_complete_frame();
 
   std::vector<std::uint8_t> buffer_;
   std::size_t start_ = 0;
+  // Offset from start_ below which later_complete_frame() has nothing left to
+  // find, so bytes of a long frame arriving piecewise are examined once.
+  std::size_t lookahead_ = 0;
 };
 
 }  // namespace lightstage::protocol

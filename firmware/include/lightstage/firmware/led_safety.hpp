@@ -31,6 +31,13 @@ class LedSafety {
   // On-time of `led_id` inside the window (end_us - duty_window_us, end_us].
   double on_time_in_window(int led_id, double end_us) const;
 
+  // The longest pulse `led_id` may start at `start_us` (0 if none): what
+  // check() allows, found by bisection (the on-time a pulse adds grows with
+  // its length faster than old history leaves the window).
+  double allowed_on_us(int led_id, double start_us) const;
+
+  const LedLimits& limits(int led_id) const { return state(led_id).limits; }
+
  private:
   struct Interval {
     double on_us;

@@ -7,8 +7,11 @@
 // (or, equivalently, scale the light rows by it).
 
 #include <Eigen/Core>
+#include <opencv2/core/types.hpp>
 
 #include <cstddef>
+#include <functional>
+#include <vector>
 
 namespace lightstage {
 
@@ -23,5 +26,15 @@ struct NearLights {
 // Fills `directions` (images × 3, unit rows) and `gains` (images) for one pixel.
 void near_light_directions(const NearLights& near, std::size_t pixel, Eigen::MatrixX3d& directions,
                            Eigen::VectorXd& gains);
+
+// The viewing ray through image point (u, v) (pixel (col, row) centred at
+// (col + 0.5, row + 0.5)): origin and unit direction, dome frame, mm.
+using PixelRay =
+    std::function<void(const Eigen::Vector2d& uv, Eigen::Vector3d* origin, Eigen::Vector3d* direction)>;
+
+// Where each pixel's viewing ray meets the plane z = plane_z_mm: the first
+// guess for NearLights::points_mm when the surface is not known (pixels × 3).
+Eigen::MatrixX3d points_on_plane(const std::vector<cv::Point>& pixels, const PixelRay& ray,
+                                 double plane_z_mm);
 
 }  // namespace lightstage

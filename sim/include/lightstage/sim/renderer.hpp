@@ -40,6 +40,8 @@ class Renderer {
 
   const cv::Mat& mask() const { return mask_; }
   const GroundTruth& ground_truth() const { return truth_; }
+  // Diffuse albedo of the surface seen at each pixel (CV_32FC1, 0 off the object).
+  cv::Mat albedo_map() const;
   const Camera& camera() const { return camera_; }
 
   // Light direction and irradiance factor at object-frame point x for an LED at
@@ -61,6 +63,9 @@ class Renderer {
   Splat mirror_coverage(int row, int col, const Pixel& px, const Vec3& led) const;
   void add_mirror(const Vec3& led, double scale, cv::Mat& out) const;
   std::optional<Hit> trace(double u, double v, Vec3* view) const;
+  // Fraction of each pixel the object covers (8×8 samples where the
+  // silhouette crosses the pixel), for Scene::environment_radiance.
+  cv::Mat silhouette_coverage() const;
 
   Scene scene_;
   Camera camera_;
@@ -69,6 +74,7 @@ class Renderer {
   int threads_;
   std::vector<Pixel> pixels_;
   cv::Mat mask_;
+  cv::Mat coverage_;  // CV_64FC1, only when a mirror reflects an environment
   GroundTruth truth_;
 };
 

@@ -32,6 +32,10 @@ struct Scene {
   double led_radius_mm = 2.5;      // LEDs as seen in a mirror: disks of this radius
   double led_radiance = 1.0;       // their radiance, in shading units (a mirror of reflectance 1 shows this)
   double highlight_blur_px = 0.7;  // lens PSF (Gaussian sigma, pixels) applied to mirror highlights; 0 = none
+  // A mirror also reflects the dome's interior, lit by the LEDs that are on: a
+  // uniform radiance of this much per unit LED intensity, anti-aliased at the
+  // silhouette, so a chrome sphere's outline can be found in the images. 0 = none.
+  double environment_radiance = 0.0;
   bool cast_shadows = true;        // march shadow rays (height fields)
 
   nlohmann::json describe() const;

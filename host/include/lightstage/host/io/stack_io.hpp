@@ -48,8 +48,10 @@ ImageStack load_stack(const std::filesystem::path& dir, const LoadOptions& optio
 // depth_gt.pfm are written when present; manifest.json last. Keys of
 // `extra_manifest` (an object: rig, scene, sensor, ...) are added at the top
 // level; an "extra_manifest.frames" array of objects, one per frame, is merged
-// into the frame entries. Every file is written atomically.
+// into the frame entries. Every file is written atomically. With
+// `write_images` false the frame images are taken to be on disk already (a
+// capture writes each as it lands) and only the other files are rewritten.
 void write_stack(const std::filesystem::path& dir, const ImageStack& stack,
-                 const nlohmann::json& extra_manifest = nlohmann::json::object());
+                 const nlohmann::json& extra_manifest = nlohmann::json::object(), bool write_images = true);
 
 }  // namespace lightstage::io

@@ -1,0 +1,128 @@
+// `lightstage camera`: how a camera maps light to numbers — calibrate its
+// response from an exposure bracket, and check how linear it is.
+#include "commands.hpp"
+
+#include "lightstage/common/rig.hpp"
+#include "lightstage/host/capture/capture_session.hpp"
+#include "lightstage/host/capture/response_curve.hpp"
+#include "lightstage/host/controller/controller_client.hpp"
+#include "lightstage/hw/cameras.hpp"
+#include "lightstage/sim/camera/sim_camera.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <memory>
+
+namespace lightstage::cli {
+namespace {
+
+struct BracketArgs {
+  std::string rig = default_rig_path().string();
+  std::string controller;
+  std::string camera;
+  int led = -1;
+  std::vector<double> exposures;
+  std::string response;
+  std::string out;
+  bool json = false;
+  CaptureOptions options;
+};
+
+void add_bracket_options(CLI::App* sub, BracketArgs& args) {
+  sub->add_option("--rig", args.rig, "rig description (YAML)")->capture_default_str();
+  sub->add_option("--controller", args.controller, "controller URI")->required();
+  sub->add_option("--camera", args.camera, "camera URI")->required();
+  sub->add_option("--led", args.led, "the LED lighting the still scene (default: the rig's first)");
+  sub->add_option("--exposures-us", args.exposures,
+                  "the bracket (default: 8 exposures doubling from 1/16 of the rig camera's)")
+      ->delimiter(',');
+  sub->add_option("--loop", args.options.loop, "open, closed or auto")->capture_default_str();
+}
+
+// The bracket: frames of one LED at each exposure.
+std::vector<cv::Mat> take_bracket(BracketArgs& args, std::vector<double>& exposures, int& bits) {
+  const Rig rig = load_rig(args.rig);
+  if (args.led < 0) args.led = rig.leds.front().id;
+  exposures = args.exposures;
+  if (exposures.empty()) {
+    for (int i = 0; i < 8; ++i) exposures.push_back(rig.camera.exposure_us / 16 * std::exp2(i));
+  }
+  hw::register_hw_cameras();
+  sim::register_sim_camera();
+  auto camera = camera::open_camera_uri(args.camera);
+  auto controller = connect_controller(args.controller);
+  const auto images = capture_bracket(rig, *controller, *camera, args.led, exposures, args.options);
+  bits = images.front().depth() == CV_8U ? 8 : 16;
+  return images;
+}
+
+}  // namespace
+
+void add_camera(CLI::App& app) {
+  CLI::App* camera = app.add_subcommand(
+      "camera",
+      "Calibrate a camera's response and check its linearity, from an exposure bracket of a still scene\n"
+      "lit by one LED. Solvers need radiance-linear images: raw sensors are; cameras with a tone curve\n"
+      "need their inverse response, which `capture --response` then applies to every frame.\n"
+      "Example: lightstage camera response --controller unix:/tmp/domed.sock --camera v4l2:/dev/video0 "
+      "--out response.json");
+  camera->require_subcommand(1);
+
+  auto response = std::make_shared<BracketArgs>();
+  CLI::App* calibrate = camera->add_subcommand(
+      "response", "fit the inverse response (Debevec-Malik, OpenCV photo) and write it as JSON");
+  add_bracket_options(calibrate, *response);
+  calibrate->add_option("--out", response->out, "response file to write")->required();
+  calibrate->callback([response] {
+    std::vector<double> exposures;
+    int bits = 16;
+    const auto images = take_bracket(*response, exposures, bits);
+    const InverseResponse curve = calibrate_response(images, exposures, bits);
+    curve.save(response->out);
+    // Linearity over the middle three exposures, where most pixels are well exposed in all of them.
+    const std::size_t mid = images.size() / 2;
+    const std::vector<cv::Mat> middle(images.begin() + static_cast<std::ptrdiff_t>(mid - 1),
+                                      images.begin() + static_cast<std::ptrdiff_t>(mid + 2));
+    const std::vector<double> middle_exposures(exposures.begin() + static_cast<std::ptrdiff_t>(mid - 1),
+                                               exposures.begin() + static_cast<std::ptrdiff_t>(mid + 2));
+    fmt::print("{}: inverse response of {} knots from {} exposures\n", response->out, curve.knots().size(),
+               exposures.size());
+    try {
+      const LinearityReport after = check_linearity(middle, middle_exposures, curve);
+      fmt::print("after it, exposures {}-{} us are linear within {:.2f}% ({} pixels)\n",
+                 middle_exposures.front(), middle_exposures.back(), 100 * after.max_deviation,
+                 after.pixels_used);
+    } catch (const InputError& e) {
+      fmt::print("(no linearity figure: {})\n", e.what());
+    }
+  });
+
+  auto linearity = std::make_shared<BracketArgs>();
+  CLI::App* check = camera->add_subcommand(
+      "linearity",
+      "how linear the camera is (with --response: after linearisation): radiance/exposure per "
+      "exposure, relative to the median, for pixels well inside the range in every frame");
+  add_bracket_options(check, *linearity);
+  check->add_option("--response", linearity->response, "inverse response to apply first");
+  check->add_flag("--json", linearity->json, "print the report as JSON");
+  check->callback([linearity] {
+    std::vector<double> exposures;
+    int bits = 16;
+    const auto images = take_bracket(*linearity, exposures, bits);
+    const InverseResponse curve = linearity->response.empty() ? InverseResponse::identity(bits)
+                                                              : InverseResponse::load(linearity->response);
+    const LinearityReport report = check_linearity(images, exposures, curve);
+    if (linearity->json) {
+      fmt::print("{}\n", report.to_json().dump(2));
+      return;
+    }
+    for (std::size_t i = 0; i < exposures.size(); ++i) {
+      fmt::print("exposure {:>10.1f} us  radiance/exposure {:7.4f} of the median\n", exposures[i],
+                 report.relative_ratio[i]);
+    }
+    fmt::print("linear within {:.2f}% over {} pixels\n", 100 * report.max_deviation, report.pixels_used);
+  });
+}
+
+}  // namespace lightstage::cli

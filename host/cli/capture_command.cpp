@@ -1,0 +1,94 @@
+// `lightstage capture`: run the dome and the camera together and write a stack.
+#include "commands.hpp"
+
+#include "lightstage/common/rig.hpp"
+#include "lightstage/host/capture/capture_session.hpp"
+#include "lightstage/host/controller/controller_client.hpp"
+#include "lightstage/hw/cameras.hpp"
+#include "lightstage/sim/camera/sim_camera.hpp"
+
+#include <fmt/format.h>
+
+#include <memory>
+
+namespace lightstage::cli {
+
+void add_capture(CLI::App& app) {
+  struct Args {
+    std::string rig = default_rig_path().string();
+    std::string controller;
+    std::string camera;
+    std::string exposure = "auto";
+    std::vector<int> leds;
+    bool quiet = false;
+    bool json = false;
+    CaptureOptions options;
+  };
+  auto args = std::make_shared<Args>();
+  CLI::App* sub = app.add_subcommand(
+      "capture",
+      "Capture a stack: the controller lights each LED in turn and triggers the camera.\n"
+      "Frames are matched to LEDs by trigger time, dropped frames are retaken, and every frame is\n"
+      "written as it lands: DIR is a loadable stack (DiLiGenT layout + manifest.json) at every\n"
+      "moment, and --resume completes an interrupted capture. Exposure is fixed (--exposure-us N)\n"
+      "or chosen per LED from a preview pass (auto); dark frames per exposure give the black level.\n"
+      "Example: lightstage capture --controller unix:/run/lightstage/domed.sock --camera v4l2:/dev/video0 "
+      "--out scans/coin");
+  sub->add_option("--rig", args->rig, "rig description (YAML)")->capture_default_str();
+  sub->add_option("--controller", args->controller, "controller URI: tcp:, unix:, serial:, usb:")->required();
+  sub->add_option("--camera", args->camera, "camera URI: v4l2:/dev/videoN, libcamera:ID, sim:PATH")
+      ->required();
+  sub->add_option("--out", args->options.out, "stack folder to write")->required();
+  sub->add_flag("--resume", args->options.resume, "complete the interrupted capture in --out");
+  sub->add_option("--exposure-us", args->exposure, "exposure in us, or auto (per LED, from a preview)")
+      ->capture_default_str();
+  sub->add_option("--auto-target", args->options.auto_target,
+                  "auto: the brightest pixels' level as a share of full scale")
+      ->capture_default_str();
+  sub->add_option("--gain", args->options.gain, "analogue gain (default: the camera's)");
+  sub->add_option("--dark-frames", args->options.dark_frames, "dark frames averaged per exposure (0 = none)")
+      ->capture_default_str();
+  sub->add_option("--max-retakes", args->options.max_retakes, "retakes of a dropped frame before giving up")
+      ->capture_default_str();
+  sub->add_option("--loop", args->options.loop, "open, closed (wait for the camera's strobe) or auto")
+      ->capture_default_str();
+  sub->add_option("--settle-us", args->options.settle_us, "LED on to trigger")->capture_default_str();
+  sub->add_option("--gap-us", args->options.gap_us, "dark time between frames")->capture_default_str();
+  sub->add_option("--leds", args->leds, "LED ids to capture, in order (default: all)")->delimiter(',');
+  sub->add_option(
+      "--response", args->options.response,
+      "the camera's inverse response (lightstage camera response): frames are linearised to float PFM");
+  sub->add_flag("--quiet", args->quiet, "no progress line");
+  sub->add_flag("--json", args->json, "print one JSON object with the result");
+  sub->callback([args] {
+    CaptureOptions options = args->options;
+    if (args->exposure != "auto") {
+      try {
+        options.exposure_us = std::stod(args->exposure);
+      } catch (const std::exception&) {
+        fail("--exposure-us: '{}' is not a number or auto", args->exposure);
+      }
+    }
+    options.led_ids = args->leds;
+    options.mode = args->json ? OutputMode::kJson : args->quiet ? OutputMode::kQuiet : OutputMode::kHuman;
+    const Rig rig = load_rig(args->rig);
+    hw::register_hw_cameras();
+    sim::register_sim_camera();
+    auto camera = camera::open_camera_uri(args->camera);
+    auto controller = connect_controller(args->controller);
+    if (controller->info().rig_name() != rig.name) {
+      fail("--rig '{}' is rig '{}', but the controller runs rig '{}'", args->rig, rig.name,
+           controller->info().rig_name());
+    }
+    const CaptureReport report = capture_stack(rig, *controller, *camera, options);
+    if (args->json) {
+      nlohmann::json j = report.to_json();
+      j["out"] = options.out.string();
+      fmt::print("{}\n", j.dump(2));
+    } else {
+      fmt::print("{}: {}\n", options.out.string(), report.message);
+    }
+  });
+}
+
+}  // namespace lightstage::cli

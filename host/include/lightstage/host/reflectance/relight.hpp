@@ -1,0 +1,36 @@
+#pragma once
+// Relighting from a solver's output folder: normals plus a per-pixel BRDF
+// (the bi-polynomial coefficients a bi-polynomial or auto solve writes) or,
+// for methods without one, the Lambertian albedo. A rendered value is
+//   ρ(n·h, l·h) · max(n·l, 0)    (ρ clamped to ≥ 0)
+// in the stack's units (linear, at unit light intensity).
+
+#include "lightstage/common/geometry.hpp"
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include <filesystem>
+
+namespace lightstage {
+
+struct RelightModel {
+  cv::Mat normals;       // CV_32FC3
+  cv::Mat solved;        // CV_8UC1
+  cv::Mat albedo;        // CV_32FC1 (Lambertian fallback)
+  cv::Mat coefficients;  // CV_32FC(k) or empty
+  int order = 0;         // bi-polynomial order, 0 = Lambertian albedo
+};
+
+// Reads normal.png, albedo.pfm and (when summary.json lists them) the
+// brdf_*.pfm coefficient maps from a `solve` output folder. Errors name the file.
+RelightModel load_relight_model(const std::filesystem::path& result_dir);
+
+// CV_32FC1 image under one distant light `light` (object -> light, normalised here).
+cv::Mat relight(const RelightModel& model, const Vec3& light, const Vec3& view = Vec3::UnitZ());
+
+// `count` lights on a ring at `elevation_deg` above the image plane, for a
+// turntable-of-light animation.
+std::vector<Vec3> turntable_lights(int count, double elevation_deg);
+
+}  // namespace lightstage

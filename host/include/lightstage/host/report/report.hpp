@@ -1,0 +1,69 @@
+#pragma once
+// The report of a solve: one self-contained HTML page (docs/report.md) that a
+// person opens offline to judge a capture — normals with the reference-sphere
+// legend, albedo, depth relief, the lights on the hemisphere (nominal and
+// calibrated), per-light statistics, the residual / confidence maps, the
+// angular error against ground truth, and a relighting viewer. Every image is
+// an embedded PNG data URI, every plot SVG written here, the viewer's
+// JavaScript is compiled into the program (host/src/report/web/).
+//
+// Inputs, all found from the result folder:
+//   RESULT_DIR/normal.png, albedo.pfm|albedo.png, summary.json   (required: normal.png)
+//   RESULT_DIR/residual.pfm, confidence.pfm, depth.pfm           (each optional)
+//   ReportOptions::depth: a `lightstage integrate` folder (depth.pfm, surface.json)
+//   the input stack, summary.json "input" (or ReportOptions::stack): light
+//     directions, per-light statistics, mask, Normal_gt.png
+//   calibration.json: ReportOptions::calibration, RESULT_DIR/calibration.json,
+//     summary.json "calibration", or the stack manifest's "calibration"
+// A part whose input is missing is left out with a note saying why.
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace lightstage::report {
+
+struct ReportOptions {
+  // Ground-truth normals: a Normal_gt.png (project encoding) or a folder
+  // holding one (and optionally mask.png). Default: the input stack's.
+  std::optional<std::filesystem::path> ground_truth;
+  // A calibration.json (nominal and calibrated light positions). Default: found as above.
+  std::optional<std::filesystem::path> calibration;
+  // Depth: a depth.pfm, or a `lightstage integrate` output folder holding one
+  // (its surface.json gives the camera). Default: RESULT_DIR/depth.pfm.
+  std::optional<std::filesystem::path> depth;
+  // The input stack folder. Default: summary.json "input".
+  std::optional<std::filesystem::path> stack;
+  // Per-light statistics need the stack's images; off skips loading them.
+  bool light_statistics = true;
+  // Shadow threshold for the per-light shadow share; unset = the solver's
+  // (summary.json parameters.shadow_threshold when > 0), else 0.02.
+  std::optional<double> shadow_threshold;
+  // The viewer embeds at most this many pixels (larger results are subsampled).
+  int viewer_max_pixels = 1 << 20;
+
+  void check() const;  // throws InputError naming the field and value
+};
+
+struct ReportSummary {
+  std::filesystem::path file;         // the page written
+  std::size_t bytes = 0;              // its size
+  std::vector<std::string> sections;  // ids of the sections present, in page order
+  std::vector<std::string> notes;     // what was left out or approximated, and why
+
+  nlohmann::json to_json() const;
+};
+
+// Builds the page for `result_dir`. `summary`, when given, receives the same
+// information write_report returns (without file and bytes).
+std::string render_report(const std::filesystem::path& result_dir, const ReportOptions& options = {},
+                          ReportSummary* summary = nullptr);
+
+// render_report, written atomically to `out` (default RESULT_DIR/report.html).
+ReportSummary write_report(const std::filesystem::path& result_dir, const std::filesystem::path& out = {},
+                           const ReportOptions& options = {});
+
+}  // namespace lightstage::report

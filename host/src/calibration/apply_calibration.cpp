@@ -1,0 +1,137 @@
+#include "lightstage/host/calibration/apply_calibration.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/host/calibration/calibration_images.hpp"
+#include "lightstage/host/calibration/lp_file.hpp"
+
+#include <map>
+
+namespace lightstage::calibration {
+namespace {
+
+namespace fs = std::filesystem;
+
+LightCalibration from_lp(const fs::path& file) {
+  LightCalibration cal;
+  cal.direction_method = "lp-file";
+  for (const auto& entry : read_lp(file)) {
+    CalibratedLight light;
+    // RTI tools write paths; the file name is what a stack lists.
+    std::string name = entry.filename;
+    if (const auto slash = name.find_last_of("/\\"); slash != std::string::npos)
+      name = name.substr(slash + 1);
+    light.image = name;
+    light.measured = true;
+    light.direction = entry.direction;
+    cal.lights.push_back(std::move(light));
+  }
+  return cal;
+}
+
+std::vector<std::size_t> match(const LightCalibration& cal, const ImageStack& stack, const fs::path& file,
+                               std::string* matched_by) {
+  const std::size_t frames = stack.frames.size();
+  std::vector<std::size_t> result(frames);
+  const bool ids =
+      std::all_of(stack.frames.begin(), stack.frames.end(), [](const Frame& f) { return f.led_id >= 0; }) &&
+      std::all_of(cal.lights.begin(), cal.lights.end(),
+                  [](const CalibratedLight& l) { return l.led_id >= 0; });
+  if (ids) {
+    std::map<int, std::size_t> by_id;
+    for (std::size_t i = 0; i < cal.lights.size(); ++i) by_id[cal.lights[i].led_id] = i;
+    for (std::size_t f = 0; f < frames; ++f) {
+      const auto it = by_id.find(stack.frames[f].led_id);
+      if (it == by_id.end())
+        fail("{}: no light for LED {} (frame {}, {})", file.string(), stack.frames[f].led_id, f,
+             stack.frames[f].filename);
+      result[f] = it->second;
+    }
+    *matched_by = "led_id";
+    return result;
+  }
+  std::map<std::string, std::size_t> by_name;
+  for (std::size_t i = 0; i < cal.lights.size(); ++i) by_name[cal.lights[i].image] = i;
+  if (cal.direction_method == "lp-file" &&
+      std::all_of(stack.frames.begin(), stack.frames.end(),
+                  [&](const Frame& f) { return by_name.count(f.filename) > 0; })) {
+    for (std::size_t f = 0; f < frames; ++f) result[f] = by_name[stack.frames[f].filename];
+    *matched_by = "filename";
+    return result;
+  }
+  if (cal.lights.size() != frames)
+    fail("{}: {} lights, but the stack has {} frames (and they carry no LED ids to match by)", file.string(),
+         cal.lights.size(), frames);
+  for (std::size_t f = 0; f < frames; ++f) result[f] = f;
+  *matched_by = "order";
+  return result;
+}
+
+}  // namespace
+
+nlohmann::json StackCalibration::describe() const {
+  nlohmann::json j{{"file", file.string()},
+                   {"matched_by", matched_by},
+                   {"direction_method", calibration.direction_method},
+                   {"lights", calibration.lights.size()},
+                   {"led_positions", calibration.has_positions()}};
+  return j;
+}
+
+StackCalibration apply_calibration_file(const fs::path& file, const fs::path& stack_dir, ImageStack& stack) {
+  StackCalibration result;
+  result.file = file;
+  const bool lp = file.extension() == ".lp" || file.extension() == ".LP";
+  result.calibration = lp ? from_lp(file) : read_calibration(file);
+  result.light_of_frame = match(result.calibration, stack, file, &result.matched_by);
+  for (std::size_t f = 0; f < stack.frames.size(); ++f) {
+    const CalibratedLight& light = result.calibration.lights[result.light_of_frame[f]];
+    if (!light.measured)
+      fail("{}: light {} ({}) was not measured, but frame {} ({}) needs it", file.string(),
+           result.light_of_frame[f], light.image, f, stack.frames[f].filename);
+    stack.frames[f].light_direction = light.direction;
+    stack.frames[f].light_intensity *= light.intensity;
+    if (light.position_mm) stack.frames[f].led_position_mm = light.position_mm;
+  }
+  std::error_code error;
+  if (fs::exists(stack_dir / "manifest.json", error))
+    result.stack_camera = camera_from_manifest(stack_dir / "manifest.json");
+  return result;
+}
+
+bool set_near_lights(const StackCalibration& calibration, Observations& observations,
+                     std::optional<double> plane_z_mm) {
+  const LightCalibration& cal = calibration.calibration;
+  if (!cal.has_positions()) return false;
+  CameraGeometry camera = calibration.stack_camera.value_or(cal.camera);
+  if (!calibration.stack_camera &&
+      (cal.camera.width != observations.size.width || cal.camera.height != observations.size.height)) {
+    fail(
+        "{}: the calibration's camera is {}x{}, the stack's images are {}x{}, and the stack records no "
+        "camera: "
+        "cannot place its pixels for near lights (solve with --distant-lights)",
+        calibration.file.string(), cal.camera.width, cal.camera.height, observations.size.width,
+        observations.size.height);
+  }
+  if (!camera.metric)
+    fail(
+        "{}: the calibration's camera has no known scale; near lights need one (solve with --distant-lights)",
+        calibration.file.string());
+  NearLights near;
+  const auto frames = static_cast<Eigen::Index>(calibration.light_of_frame.size());
+  near.led_positions_mm.resize(frames, 3);
+  for (Eigen::Index f = 0; f < frames; ++f) {
+    near.led_positions_mm.row(f) =
+        cal.lights[calibration.light_of_frame[static_cast<std::size_t>(f)]].position_mm->transpose();
+  }
+  near.object_centre_mm = cal.object_position_mm;
+  near.points_mm = points_on_plane(
+      observations.pixels,
+      [&camera](const Eigen::Vector2d& uv, Eigen::Vector3d* origin, Eigen::Vector3d* direction) {
+        camera.ray(uv, origin, direction);
+      },
+      plane_z_mm.value_or(cal.object_position_mm.z()));
+  observations.near = std::move(near);
+  return true;
+}
+
+}  // namespace lightstage::calibration

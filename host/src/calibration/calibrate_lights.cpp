@@ -1,0 +1,310 @@
+#include "lightstage/host/calibration/calibrate_lights.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/common/log.hpp"
+#include "lightstage/common/rig.hpp"
+#include "lightstage/common/version.hpp"
+#include "util/parallel.hpp"
+#include "util/utc_time.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <chrono>
+
+namespace lightstage::calibration {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct StackSpheres {
+  CalibrationImages images;
+  std::vector<std::size_t> spheres;  // indices into LightCalibration::spheres
+};
+
+std::vector<ImageCircle> find_circles(const CalibrationImages& images,
+                                      const LightCalibrationOptions& options) {
+  SphereDetectionOptions detection = options.detection;
+  detection.expected = options.spheres_per_stack;
+  std::vector<ImageCircle> circles;
+  if (!options.given_circles.empty()) {
+    circles = options.given_circles;
+    for (auto& c : circles) c.source = "given";
+  } else if (!images.mask.empty()) {
+    circles = circles_from_mask(images.mask, detection, (images.folder / "mask.png").string());
+  } else {
+    circles =
+        detect_circles(median_image(images.grey), detection,
+                       fmt::format("{} (median of its {} images)", images.folder.string(), images.size()));
+  }
+  // Left to right, then top to bottom: the same order in every stack.
+  std::sort(circles.begin(), circles.end(), [](const ImageCircle& a, const ImageCircle& b) {
+    return std::abs(a.centre_px.x() - b.centre_px.x()) > 1 ? a.centre_px.x() < b.centre_px.x()
+                                                           : a.centre_px.y() < b.centre_px.y();
+  });
+  return circles;
+}
+
+CameraGeometry choose_camera(const LightCalibrationOptions& options, const CalibrationImages& images,
+                             const std::optional<Rig>& rig) {
+  if (options.camera) return *options.camera;
+  if (images.camera) return *images.camera;
+  if (rig) return CameraGeometry::from_rig(rig->camera, images.width(), images.height());
+  return CameraGeometry::unknown(images.width(), images.height());
+}
+
+// The rig LED each image shows: by LED id when the stack knows it, else by order.
+std::vector<const Led*> nominal_leds(const CalibrationImages& images, const Rig& rig) {
+  std::vector<const Led*> leds(images.size(), nullptr);
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    if (images.led_ids[i] >= 0) {
+      for (const auto& led : rig.leds) {
+        if (led.id == images.led_ids[i]) leds[i] = &led;
+      }
+    } else if (rig.leds.size() == images.size()) {
+      leds[i] = &rig.leds[i];
+    }
+  }
+  return leds;
+}
+
+}  // namespace
+
+void LightCalibrationOptions::check() const {
+  if (inputs.empty()) fail("calibrate lights: at least one chrome-sphere stack (--input) is needed");
+  if (spheres_per_stack < 1 || spheres_per_stack > 16)
+    fail("calibrate lights: spheres per stack must be in 1..16, got {}", spheres_per_stack);
+  if (!given_circles.empty() && static_cast<int>(given_circles.size()) != spheres_per_stack)
+    fail("calibrate lights: {} sphere outline(s) given, but {} sphere(s) per stack expected",
+         given_circles.size(), spheres_per_stack);
+  for (const auto& c : given_circles) {
+    if (!(c.radius_px > 0) || !c.centre_px.allFinite())
+      fail(
+          "calibrate lights: a given sphere outline needs a finite centre and a positive radius, got ({}, "
+          "{}) r {}",
+          c.centre_px.x(), c.centre_px.y(), c.radius_px);
+  }
+  if (!sphere_z_mm.empty() && sphere_z_mm.size() != 1 && sphere_z_mm.size() != inputs.size())
+    fail("calibrate lights: {} sphere heights for {} stacks (give one for all, or one per stack)",
+         sphere_z_mm.size(), inputs.size());
+  if (!(sphere_radius_mm >= 0))
+    fail("calibrate lights: sphere radius must not be negative, got {}", sphere_radius_mm);
+  if (dome_radius_mm && !(*dome_radius_mm >= 0))
+    fail("calibrate lights: dome radius must not be negative, got {}", *dome_radius_mm);
+  if (camera) camera->check();
+  if (threads < 0) fail("calibrate lights: threads must be 0 (automatic) or positive, got {}", threads);
+  detection.check();
+  highlight.check();
+  intensity.check();
+}
+
+LightCalibrationRun calibrate_lights(const LightCalibrationOptions& options) {
+  options.check();
+  const auto start = std::chrono::steady_clock::now();
+  std::optional<Rig> rig;
+  if (!options.rig.empty()) rig = load_rig(options.rig);
+
+  LightCalibrationRun run;
+  LightCalibration& cal = run.calibration;
+  cal.created = util::utc_timestamp();
+  cal.software = std::string("lightstage ") + kVersion;
+  if (rig) {
+    cal.rig = options.rig.string();
+    cal.object_position_mm = rig->object_position_mm;
+  }
+  cal.dome_radius_mm = options.dome_radius_mm;
+  if (!cal.dome_radius_mm && rig) cal.dome_radius_mm = rig->dome_radius_mm;
+  if (cal.dome_radius_mm && *cal.dome_radius_mm <= 0) cal.dome_radius_mm.reset();
+
+  // Load every stack and place its spheres.
+  std::vector<StackSpheres> stacks;
+  for (std::size_t s = 0; s < options.inputs.size(); ++s) {
+    StackSpheres stack{load_calibration_images(options.inputs[s], 1, options.threads), {}};
+    const CalibrationImages& images = stack.images;
+    if (s == 0) {
+      cal.camera = choose_camera(options, images, rig);
+    } else {
+      const CalibrationImages& first = stacks.front().images;
+      if (images.size() != first.size())
+        fail("{}: {} images, but {} has {} (every stack must hold the same lights)", images.folder.string(),
+             images.size(), first.folder.string(), first.size());
+      if (images.width() != first.width() || images.height() != first.height())
+        fail("{}: images are {}x{}, but {} has {}x{}", images.folder.string(), images.width(),
+             images.height(), first.folder.string(), first.width(), first.height());
+      for (std::size_t i = 0; i < images.size(); ++i) {
+        if (images.led_ids[i] >= 0 && first.led_ids[i] >= 0 && images.led_ids[i] != first.led_ids[i])
+          fail("{}: image {} shows LED {}, but image {} of {} shows LED {}", images.folder.string(),
+               images.filenames[i], images.led_ids[i], first.filenames[i], first.folder.string(),
+               first.led_ids[i]);
+      }
+    }
+    const double z = options.sphere_z_mm.empty()       ? cal.object_position_mm.z()
+                     : options.sphere_z_mm.size() == 1 ? options.sphere_z_mm.front()
+                                                       : options.sphere_z_mm[s];
+    for (const auto& circle : find_circles(images, options)) {
+      stack.spheres.push_back(cal.spheres.size());
+      cal.spheres.push_back({images.folder, locate_sphere(circle, cal.camera, z, options.sphere_radius_mm)});
+      logger("host")->info(
+          "{}: sphere at ({:.2f}, {:.2f}) px, radius {:.2f} px (from the {}, edge RMS {:.3f} px)",
+          images.folder.string(), circle.centre_px.x(), circle.centre_px.y(), circle.radius_px, circle.source,
+          circle.rms_px);
+    }
+    run.sphere_views.push_back(max_image(images.grey));
+    stacks.push_back(std::move(stack));
+  }
+
+  // Highlights: every image of every stack, on every sphere in it.
+  const CalibrationImages& first = stacks.front().images;
+  const std::size_t lights = first.size();
+  cal.lights.resize(lights);
+  for (std::size_t i = 0; i < lights; ++i) {
+    cal.lights[i].image = first.filenames[i];
+    cal.lights[i].led_id = first.led_ids[i];
+  }
+  for (const auto& stack : stacks) {
+    const cv::Mat background = median_image(stack.images.grey);
+    for (const std::size_t sphere_index : stack.spheres) {
+      const MirrorSphere& sphere = cal.spheres[sphere_index].sphere;
+      std::vector<SphereObservation> found(lights);
+      util::parallel_chunks(lights, options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+          found[i].sphere = sphere_index;
+          found[i].highlight = find_highlight(stack.images.grey[i], background, stack.images.saturated[i],
+                                              sphere.circle, options.highlight);
+          if (found[i].highlight.usable())
+            found[i].reflection = reflect_at(sphere, cal.camera, found[i].highlight.centre_px);
+        }
+      });
+      for (std::size_t i = 0; i < lights; ++i) {
+        const Highlight& h = found[i].highlight;
+        if (h.status != HighlightStatus::kFound) {
+          cal.problems.push_back(fmt::format("{}: sphere {}: {}: {}",
+                                             (stack.images.folder / stack.images.filenames[i]).string(),
+                                             sphere_index, status_name(h.status), h.note));
+        }
+        cal.lights[i].observations.push_back(std::move(found[i]));
+      }
+    }
+  }
+
+  // Directions (and positions) from the observations.
+  const bool metric = cal.camera.metric;
+  const bool several_positions = cal.spheres.size() >= 2 && metric;
+  cal.direction_method = several_positions                ? "triangulated"
+                         : (cal.dome_radius_mm && metric) ? "dome-radius"
+                                                          : "mirror";
+  std::vector<std::string> unmeasured;
+  for (std::size_t i = 0; i < lights; ++i) {
+    CalibratedLight& light = cal.lights[i];
+    std::vector<Ray> rays;
+    Vec3 mirror_sum = Vec3::Zero();
+    for (const auto& o : light.observations) {
+      if (!o.reflection) continue;
+      rays.push_back({o.reflection->point_mm, o.reflection->direction});
+      mirror_sum += o.reflection->direction;
+    }
+    if (rays.empty()) {
+      unmeasured.push_back(light.image);
+      continue;
+    }
+    light.measured = true;
+    light.direction = mirror_sum.normalized();
+    if (several_positions && rays.size() >= 2) {
+      if (const auto t = triangulate(rays)) {
+        light.position_mm = t->position_mm;
+        light.position_residual_mm = t->rms_mm;
+      }
+    }
+    if (!light.position_mm && cal.dome_radius_mm && metric) {
+      // One ray (or parallel rays): where it meets the dome, centred on the dome frame's origin.
+      Vec3 sum = Vec3::Zero();
+      int hits = 0;
+      for (const auto& ray : rays) {
+        if (const auto p = intersect_dome(ray, Vec3::Zero(), *cal.dome_radius_mm)) {
+          sum += *p;
+          ++hits;
+        }
+      }
+      if (hits > 0) light.position_mm = sum / hits;
+    }
+    if (light.position_mm) light.direction = (*light.position_mm - cal.object_position_mm).normalized();
+  }
+  if (!unmeasured.empty() && !options.allow_missing) {
+    std::string details;
+    for (const auto& p : cal.problems) details += "\n  " + p;
+    fail(
+        "calibrate lights: no usable highlight for {} of {} lights ({}); fix the captures or pass "
+        "--allow-missing:{}",
+        unmeasured.size(), lights, fmt::join(unmeasured, ", "), details);
+  }
+
+  // Nominal layout: per-light nominal positions, and the rigid fit as a sanity check.
+  if (rig) {
+    const auto leds = nominal_leds(first, *rig);
+    std::vector<Vec3> nominal, measured;
+    for (std::size_t i = 0; i < lights; ++i) {
+      if (!leds[i]) continue;
+      cal.lights[i].nominal_position_mm = leds[i]->position_mm;
+      if (cal.lights[i].led_id < 0) cal.lights[i].led_id = leds[i]->id;
+      if (cal.lights[i].position_mm) {
+        nominal.push_back(leds[i]->position_mm);
+        measured.push_back(*cal.lights[i].position_mm);
+      }
+    }
+    if (nominal.size() >= 3) cal.nominal_fit = fit_to_nominal(nominal, measured);
+  }
+
+  // Intensities from a matte target under the same lights.
+  if (!options.intensity_input.empty()) {
+    const CalibrationImages target = load_calibration_images(options.intensity_input, 1, options.threads);
+    if (target.size() != lights)
+      fail("{}: {} images, but the chrome-sphere stack {} has {} (the same lights are needed)",
+           options.intensity_input.string(), target.size(), first.folder.string(), lights);
+    LightGeometry geometry;
+    geometry.object_centre_mm = cal.object_position_mm;
+    for (const auto& light : cal.lights) {
+      geometry.measured.push_back(light.measured);
+      geometry.directions.push_back(light.direction);
+      geometry.positions_mm.push_back(light.position_mm);
+    }
+    TargetSurface surface;
+    const bool flat = options.intensity_target == IntensityTarget::kFlatTarget;
+    if (flat) {
+      cv::Mat region = target.mask;
+      if (region.empty()) {
+        // The target: where the median image is well lit.
+        const cv::Mat median = median_image(target.grey);
+        double high = 0;
+        cv::minMaxLoc(median, nullptr, &high);
+        cv::compare(median, 0.2 * high, region, cv::CMP_GT);
+      }
+      surface = plane_surface(region, cal.camera, cal.object_position_mm.z());
+    } else {
+      SphereDetectionOptions detection = options.detection;
+      detection.expected = 1;
+      const auto circles =
+          target.mask.empty()
+              ? detect_circles(median_image(target.grey), detection,
+                               options.intensity_input.string() + " (median image)")
+              : circles_from_mask(target.mask, detection, (options.intensity_input / "mask.png").string());
+      const MirrorSphere sphere =
+          locate_sphere(circles.front(), cal.camera, cal.object_position_mm.z(), options.sphere_radius_mm);
+      surface = sphere_surface(sphere, cal.camera);
+    }
+    const IntensityResult fit = fit_intensities(target, surface, geometry, flat, options.intensity);
+    for (std::size_t i = 0; i < lights; ++i) {
+      if (!cal.lights[i].measured) continue;
+      cal.lights[i].intensity = fit.relative[i];
+      cal.lights[i].intensity_residual = fit.residual[i];
+    }
+    cal.intensity_source = {{"stack", options.intensity_input.string()},
+                            {"target", intensity_target_name(options.intensity_target)},
+                            {"near_lights", cal.has_positions()},
+                            {"pixels", surface.pixels.size()}};
+    run.flat_field = fit.flat_field;
+  }
+  run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return run;
+}
+
+}  // namespace lightstage::calibration

@@ -1,0 +1,256 @@
+#include "lightstage/host/calibration/highlight.hpp"
+
+#include "lightstage/common/error.hpp"
+
+#include <Eigen/Dense>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <vector>
+
+namespace lightstage::calibration {
+namespace {
+
+// Blobs this small are about the lens blur's size: a thresholded centroid
+// would be pulled toward pixel centres ("pixel locking"), so their centre
+// comes from a fitted blur spot instead.
+constexpr int kSmallBlobPixels = 40;
+constexpr int kFitHalfWindow = 3;  // 7 × 7 pixels
+
+double pixel_integral(double lo, double hi, double centre, double sigma) {
+  const double k = 1 / (sigma * std::sqrt(2.0));
+  return 0.5 * (std::erf((hi - centre) * k) - std::erf((lo - centre) * k));
+}
+
+// Least-squares fit of a pixel-integrated Gaussian spot a·G(u, v, σ) + b to
+// `diff` around `start` (image points); nullopt when it does not converge to
+// a plausible spot.
+std::optional<Vec2> fit_spot(const cv::Mat& diff, const cv::Point& roi_origin, const Vec2& start,
+                             double peak) {
+  const int cc = static_cast<int>(std::floor(start.x())) - roi_origin.x;
+  const int cr = static_cast<int>(std::floor(start.y())) - roi_origin.y;
+  if (cc - kFitHalfWindow < 0 || cr - kFitHalfWindow < 0 || cc + kFitHalfWindow >= diff.cols ||
+      cr + kFitHalfWindow >= diff.rows)
+    return std::nullopt;
+  struct Sample {
+    double x, y, value;
+  };
+  std::vector<Sample> samples;
+  for (int r = cr - kFitHalfWindow; r <= cr + kFitHalfWindow; ++r)
+    for (int c = cc - kFitHalfWindow; c <= cc + kFitHalfWindow; ++c)
+      samples.push_back({static_cast<double>(roi_origin.x + c), static_cast<double>(roi_origin.y + r),
+                         static_cast<double>(diff.at<float>(r, c))});
+  using Params = Eigen::Matrix<double, 5, 1>;  // amplitude (energy), u, v, sigma, background
+  Params p;
+  p << peak * 2 * kPi * 0.64, start.x(), start.y(), 0.8, 0.0;
+  auto model = [](const Params& q, const Sample& s) {
+    return q(0) * pixel_integral(s.x, s.x + 1, q(1), q(3)) * pixel_integral(s.y, s.y + 1, q(2), q(3)) + q(4);
+  };
+  auto cost = [&](const Params& q) {
+    double sum = 0;
+    for (const auto& s : samples) sum += std::pow(model(q, s) - s.value, 2);
+    return sum;
+  };
+  double lambda = 1e-3, current = cost(p);
+  for (int iteration = 0; iteration < 50; ++iteration) {
+    Eigen::Matrix<double, 5, 5> jtj = Eigen::Matrix<double, 5, 5>::Zero();
+    Params jtr = Params::Zero();
+    for (const auto& s : samples) {
+      Params j;
+      for (int k = 0; k < 5; ++k) {
+        const double h = 1e-6 * std::max(1.0, std::abs(p(k)));
+        Params plus = p, minus = p;
+        plus(k) += h;
+        minus(k) -= h;
+        j(k) = (model(plus, s) - model(minus, s)) / (2 * h);
+      }
+      jtj += j * j.transpose();
+      jtr += j * (model(p, s) - s.value);
+    }
+    Eigen::Matrix<double, 5, 5> damped = jtj;
+    damped.diagonal() *= 1 + lambda;
+    const Params step = damped.ldlt().solve(-jtr);
+    if (!step.allFinite()) return std::nullopt;
+    const Params next = p + step;
+    const double next_cost = next(3) > 0.05 ? cost(next) : current * 2;
+    if (next_cost < current) {
+      p = next;
+      current = next_cost;
+      lambda *= 0.3;
+      if (step.segment<2>(1).norm() < 1e-7) break;
+    } else {
+      lambda *= 10;
+      if (lambda > 1e8) break;
+    }
+  }
+  const Vec2 centre(p(1), p(2));
+  if (!(p(0) > 0) || !(p(3) > 0.2 && p(3) < 4) || (centre - start).norm() > 1.5) return std::nullopt;
+  return centre;
+}
+
+}  // namespace
+
+void HighlightOptions::check() const {
+  if (!(min_peak > 0 && min_peak < 1)) fail("HighlightOptions.min_peak: must be in (0, 1), got {}", min_peak);
+  if (!(threshold_fraction > 0 && threshold_fraction < 1))
+    fail("HighlightOptions.threshold_fraction: must be in (0, 1), got {}", threshold_fraction);
+  if (!(second_blob_ratio > 0 && second_blob_ratio <= 1))
+    fail("HighlightOptions.second_blob_ratio: must be in (0, 1], got {}", second_blob_ratio);
+  if (!(max_saturated_fraction > 0 && max_saturated_fraction <= 1))
+    fail("HighlightOptions.max_saturated_fraction: must be in (0, 1], got {}", max_saturated_fraction);
+  if (!(limb_margin_px >= 0))
+    fail("HighlightOptions.limb_margin_px: must not be negative, got {}", limb_margin_px);
+}
+
+const char* status_name(HighlightStatus status) {
+  switch (status) {
+    case HighlightStatus::kFound:
+      return "found";
+    case HighlightStatus::kMissing:
+      return "missing";
+    case HighlightStatus::kOverexposed:
+      return "overexposed";
+    case HighlightStatus::kAmbiguous:
+      return "ambiguous";
+  }
+  return "?";
+}
+
+nlohmann::json Highlight::to_json() const {
+  nlohmann::json j{{"status", status_name(status)},
+                   {"peak", peak},
+                   {"pixels", pixels},
+                   {"saturated_pixels", saturated_pixels},
+                   {"second_blob_ratio", second_blob_ratio}};
+  if (status == HighlightStatus::kFound || status == HighlightStatus::kAmbiguous)
+    j["centre_px"] = {centre_px.x(), centre_px.y()};
+  if (!note.empty()) j["note"] = note;
+  return j;
+}
+
+Highlight find_highlight(const cv::Mat& grey, const cv::Mat& background, const cv::Mat& saturated,
+                         const ImageCircle& circle, const HighlightOptions& options) {
+  Highlight result;
+  const cv::Rect image_rect(0, 0, grey.cols, grey.rows);
+  const int x0 = static_cast<int>(std::floor(circle.centre_px.x() - circle.radius_px)) - 1;
+  const int y0 = static_cast<int>(std::floor(circle.centre_px.y() - circle.radius_px)) - 1;
+  const int side = static_cast<int>(std::ceil(2 * circle.radius_px)) + 3;
+  const cv::Rect roi = cv::Rect(x0, y0, side, side) & image_rect;
+  if (roi.empty()) {
+    result.note = "the sphere lies outside the image";
+    return result;
+  }
+  // Background-subtracted values inside the outline; noise from their spread.
+  cv::Mat diff(roi.size(), CV_32FC1, cv::Scalar::all(0));
+  cv::Mat inside(roi.size(), CV_8UC1, cv::Scalar::all(0));
+  std::vector<float> samples;
+  int sphere_pixels = 0, clipped = 0;
+  for (int r = 0; r < roi.height; ++r) {
+    for (int c = 0; c < roi.width; ++c) {
+      const int row = roi.y + r, col = roi.x + c;
+      if ((Vec2(col + 0.5, row + 0.5) - circle.centre_px).norm() > circle.radius_px) continue;
+      inside.at<std::uint8_t>(r, c) = 255;
+      const float d = grey.at<float>(row, col) - background.at<float>(row, col);
+      diff.at<float>(r, c) = d;
+      samples.push_back(std::abs(d));
+      ++sphere_pixels;
+      if (saturated.at<std::uint8_t>(row, col) != 0) ++clipped;
+    }
+  }
+  if (sphere_pixels == 0) {
+    result.note = "the sphere covers no pixel";
+    return result;
+  }
+  if (clipped > options.max_saturated_fraction * sphere_pixels) {
+    result.status = HighlightStatus::kOverexposed;
+    result.note =
+        fmt::format("{} of the sphere's {} pixels are saturated ({:.1f}%, more than {:.1f}%)", clipped,
+                    sphere_pixels, 100.0 * clipped / sphere_pixels, 100 * options.max_saturated_fraction);
+    return result;
+  }
+  const auto middle = samples.begin() + static_cast<std::ptrdiff_t>(samples.size() / 2);
+  std::nth_element(samples.begin(), middle, samples.end());
+  const double noise = 1.4826 * *middle;
+  double peak = 0;
+  cv::Point peak_at;
+  cv::minMaxLoc(diff, nullptr, &peak, nullptr, &peak_at, inside);
+  result.peak = peak;
+  if (peak < options.min_peak) {
+    result.note = fmt::format("no highlight: the brightest point is {:.4f} above the median image (needs {})",
+                              peak, options.min_peak);
+    return result;
+  }
+  const double threshold = std::max(options.threshold_fraction * peak, 5 * noise);
+  cv::Mat blobs;
+  cv::compare(diff, threshold, blobs, cv::CMP_GT);
+  blobs &= inside;
+  cv::Mat labels;
+  const int count = cv::connectedComponents(blobs, labels, 8, CV_32S);
+  struct Blob {
+    double energy = 0, su = 0, sv = 0;
+    int pixels = 0, saturated = 0;
+    double cu = 0, cv = 0;  // centroid of saturated pixels (sums)
+  };
+  std::vector<Blob> found(static_cast<std::size_t>(count));
+  for (int r = 0; r < roi.height; ++r) {
+    for (int c = 0; c < roi.width; ++c) {
+      const int label = labels.at<int>(r, c);
+      if (label == 0) continue;
+      Blob& b = found[static_cast<std::size_t>(label)];
+      const double w = diff.at<float>(r, c);
+      const double u = roi.x + c + 0.5, v = roi.y + r + 0.5;
+      b.energy += w;
+      b.su += w * u;
+      b.sv += w * v;
+      ++b.pixels;
+      if (saturated.at<std::uint8_t>(roi.y + r, roi.x + c) != 0) {
+        ++b.saturated;
+        b.cu += u;
+        b.cv += v;
+      }
+    }
+  }
+  std::vector<std::size_t> order;
+  for (std::size_t i = 1; i < found.size(); ++i) order.push_back(i);
+  // Saturated blobs first (the LED itself is the brightest thing), then by energy.
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    if ((found[a].saturated > 0) != (found[b].saturated > 0)) return found[a].saturated > 0;
+    return found[a].energy > found[b].energy;
+  });
+  if (order.empty()) {
+    result.note = "no highlight above the noise";
+    return result;
+  }
+  const Blob& main = found[order.front()];
+  result.pixels = main.pixels;
+  result.saturated_pixels = main.saturated;
+  result.centre_px = main.saturated > 0 ? Vec2(main.cu / main.saturated, main.cv / main.saturated)
+                                        : Vec2(main.su / main.energy, main.sv / main.energy);
+  if (main.saturated == 0 && main.pixels <= kSmallBlobPixels) {
+    if (const auto spot = fit_spot(diff, roi.tl(), result.centre_px, peak)) result.centre_px = *spot;
+  }
+  if (order.size() > 1) result.second_blob_ratio = found[order[1]].energy / main.energy;
+  const double from_limb = circle.radius_px - (result.centre_px - circle.centre_px).norm();
+  if (from_limb < options.limb_margin_px) {
+    result.status = HighlightStatus::kMissing;
+    result.note = fmt::format(
+        "the highlight sits on the sphere's outline ({:.1f} px inside), too grazing to use", from_limb);
+    return result;
+  }
+  if (result.second_blob_ratio >= options.second_blob_ratio) {
+    const Blob& second = found[order[1]];
+    result.status = HighlightStatus::kAmbiguous;
+    result.note = fmt::format(
+        "two reflections: the strongest at ({:.1f}, {:.1f}), another at ({:.1f}, {:.1f}) with {:.0f}% of its "
+        "energy",
+        result.centre_px.x(), result.centre_px.y(), second.su / second.energy, second.sv / second.energy,
+        100 * result.second_blob_ratio);
+    return result;
+  }
+  result.status = HighlightStatus::kFound;
+  return result;
+}
+
+}  // namespace lightstage::calibration

@@ -1,0 +1,90 @@
+#include "lightstage/host/reflectance/bipolynomial_model.hpp"
+
+#include "lightstage/common/error.hpp"
+
+#include <Eigen/SVD>
+
+#include <fmt/format.h>
+
+namespace lightstage {
+
+int bipolynomial_term_count(int order) {
+  if (order < kMinBiPolynomialOrder || order > kMaxBiPolynomialOrder)
+    fail("bi-polynomial order: must be 1 (bilinear), 2 (biquadratic) or 3 (bicubic), got {}", order);
+  return (order + 1) * (order + 1);
+}
+
+void bipolynomial_basis(int order, double x, double y, double* out) {
+  const int n = order + 1;
+  double xi = 1;
+  for (int i = 0; i < n; ++i) {
+    double yj = 1;
+    for (int j = 0; j < n; ++j) {
+      out[i * n + j] = xi * yj;
+      yj *= y;
+    }
+    xi *= x;
+  }
+}
+
+double evaluate_bipolynomial(int order, const Eigen::Ref<const Eigen::VectorXd>& coefficients, double x,
+                             double y) {
+  const int n = order + 1;
+  // Horner in x of polynomials in y.
+  double result = 0;
+  for (int i = n - 1; i >= 0; --i) {
+    double row = 0;
+    for (int j = n - 1; j >= 0; --j) row = row * y + coefficients(i * n + j);
+    result = result * x + row;
+  }
+  return result;
+}
+
+double evaluate_bipolynomial(int order, const Eigen::Ref<const Eigen::VectorXd>& coefficients, const Vec3& n,
+                             const Vec3& l, const Vec3& v) {
+  const Vec3 h = (l + v).normalized();
+  return evaluate_bipolynomial(order, coefficients, n.dot(h), l.dot(h));
+}
+
+std::vector<std::string> bipolynomial_term_names(int order) {
+  const int n = order + 1;
+  std::vector<std::string> names;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) names.push_back(fmt::format("C{}{}", i, j));
+  return names;
+}
+
+const char* bipolynomial_name(int order) {
+  switch (order) {
+    case 1:
+      return "bilinear";
+    case 2:
+      return "biquadratic";
+    case 3:
+      return "bicubic";
+    default:
+      return "bipolynomial";
+  }
+}
+
+FactorisedBiPolynomial factorise_bipolynomial(int order,
+                                              const Eigen::Ref<const Eigen::VectorXd>& coefficients) {
+  const int n = order + 1;
+  Eigen::MatrixXd c(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) c(i, j) = coefficients(i * n + j);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(c, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const double s = svd.singularValues()(0);
+  FactorisedBiPolynomial f;
+  f.a = svd.matrixU().col(0) * std::sqrt(s);
+  f.b = svd.matrixV().col(0) * std::sqrt(s);
+  if (f.a(0) < 0) {
+    f.a = -f.a;
+    f.b = -f.b;
+  }
+  const double norm = c.norm();
+  f.relative_error = norm > 0 ? (c - f.a * f.b.transpose()).norm() / norm : 0.0;
+  return f;
+}
+
+}  // namespace lightstage

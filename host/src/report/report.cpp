@@ -1,0 +1,659 @@
+#include "lightstage/host/report/report.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/common/log.hpp"
+#include "lightstage/common/version.hpp"
+#include "lightstage/host/calibration/light_calibration.hpp"
+#include "lightstage/host/eval/angular_error.hpp"
+#include "lightstage/host/io/image_io.hpp"
+#include "lightstage/host/io/mask.hpp"
+#include "lightstage/host/io/normal_map.hpp"
+#include "lightstage/host/io/pfm.hpp"
+#include "lightstage/host/io/stack_io.hpp"
+#include "lightstage/host/reflectance/bipolynomial_model.hpp"
+#include "lightstage/host/report/light_statistics.hpp"
+#include "lightstage/host/report/viewer_data.hpp"
+#include "report/html.hpp"
+#include "report/maps.hpp"
+#include "report/svg.hpp"
+#include "report_web_assets.hpp"
+#include "util/atomic_file.hpp"
+#include "util/utc_time.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <numbers>
+
+namespace lightstage::report {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kDeg = 180.0 / std::numbers::pi;
+constexpr double kDefaultShadowThreshold = 0.02;
+
+nlohmann::json read_json_file(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) fail("{}: cannot open", path.string());
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    fail("{}: not valid JSON: {}", path.string(), e.what());
+  }
+}
+
+// A path named inside a JSON file: as written, else relative to `base`.
+std::optional<fs::path> resolve(const std::string& named, const fs::path& base) {
+  if (named.empty()) return std::nullopt;
+  const fs::path p(named);
+  if (fs::exists(p)) return p;
+  if (p.is_relative() && fs::exists(base / p)) return base / p;
+  return std::nullopt;
+}
+
+// "file" of a JSON value that is either a path string or an object naming one.
+std::string named_file(const nlohmann::json& value) {
+  if (value.is_string()) return value.get<std::string>();
+  if (value.is_object() && value.contains("file") && value["file"].is_string())
+    return value["file"].get<std::string>();
+  return {};
+}
+
+std::string figure(const std::string& uri, const std::string& alt, const std::string& caption,
+                   const std::string& cls = "map") {
+  return fmt::format("<figure><img class=\"{}\" src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>\n",
+                     cls, uri, escape_html(alt), caption);
+}
+
+std::string note(const std::string& text) { return "<p class=\"note\">" + escape_html(text) + "</p>\n"; }
+
+double azimuth_deg(const Vec3& d) { return std::fmod(std::atan2(d.y(), d.x()) * kDeg + 360.0, 360.0); }
+double elevation_deg(const Vec3& d) { return std::asin(std::clamp(d.normalized().z(), -1.0, 1.0)) * kDeg; }
+
+std::string percent(double share) { return format_number(100.0 * share, 3) + "%"; }
+
+// Everything the sections read, gathered once.
+struct Inputs {
+  fs::path result_dir;
+  nlohmann::json summary = nlohmann::json::object();
+  std::optional<fs::path> stack_dir;
+  std::optional<ImageStack> stack;
+  std::optional<calibration::LightCalibration> calibration;
+  std::optional<fs::path> calibration_file;
+  std::vector<std::string> notes;
+};
+
+class Page {
+ public:
+  void section(const std::string& id, const std::string& title, const std::string& body) {
+    sections_.push_back(id);
+    nav_ += fmt::format("<a href=\"#{}\">{}</a>", id, escape_html(title));
+    body_ += fmt::format("<section id=\"{}\">\n<h2>{}</h2>\n{}</section>\n", id, escape_html(title), body);
+  }
+  const std::vector<std::string>& sections() const { return sections_; }
+  const std::string& nav() const { return nav_; }
+  const std::string& body() const { return body_; }
+
+ private:
+  std::vector<std::string> sections_;
+  std::string nav_, body_;
+};
+
+void load_inputs(Inputs& in, const ReportOptions& options) {
+  const fs::path summary_path = in.result_dir / "summary.json";
+  if (fs::exists(summary_path)) {
+    in.summary = read_json_file(summary_path);
+    if (!in.summary.is_object()) fail("{}: expected a JSON object", summary_path.string());
+  } else {
+    in.notes.push_back(
+        "No summary.json in the result folder: the solver's settings and numbers are not shown.");
+  }
+
+  // The input stack.
+  if (options.stack) {
+    if (!fs::is_directory(*options.stack)) fail("--stack {}: not a folder", options.stack->string());
+    in.stack_dir = *options.stack;
+  } else if (const std::string input = in.summary.value("input", std::string()); !input.empty()) {
+    in.stack_dir = resolve(input, in.result_dir);
+    if (!in.stack_dir) {
+      in.notes.push_back(
+          fmt::format("The input stack named in summary.json ('{}') was not found from here: light "
+                      "directions and per-light "
+                      "statistics are omitted (give it with --stack).",
+                      input));
+    }
+  } else {
+    in.notes.push_back(
+        "summary.json names no input stack: light directions and per-light statistics are omitted.");
+  }
+  if (in.stack_dir) {
+    io::LoadOptions load;
+    load.min_images = 1;
+    try {
+      in.stack = io::load_stack(*in.stack_dir, load);
+    } catch (const InputError& e) {
+      if (options.stack) throw;
+      in.notes.push_back(
+          fmt::format("The input stack could not be read ({}); its sections are omitted.", e.what()));
+    }
+  }
+
+  // The light calibration.
+  std::optional<fs::path> calibration_file;
+  if (options.calibration) {
+    calibration_file = *options.calibration;
+  } else if (fs::exists(in.result_dir / "calibration.json")) {
+    calibration_file = in.result_dir / "calibration.json";
+  } else if (const auto it = in.summary.find("calibration"); it != in.summary.end()) {
+    calibration_file = resolve(named_file(*it), in.result_dir);
+  }
+  if (!calibration_file && in.stack_dir && fs::exists(*in.stack_dir / "manifest.json")) {
+    const auto manifest = read_json_file(*in.stack_dir / "manifest.json");
+    if (const auto it = manifest.find("calibration"); it != manifest.end())
+      calibration_file = resolve(named_file(*it), *in.stack_dir);
+  }
+  if (calibration_file) {
+    try {
+      in.calibration = calibration::read_calibration(*calibration_file);
+      in.calibration_file = calibration_file;
+    } catch (const InputError& e) {
+      if (options.calibration) throw;
+      in.notes.push_back(fmt::format("The light calibration could not be read ({}).", e.what()));
+    }
+  }
+}
+
+std::string header_html(const Inputs& in) {
+  const auto& s = in.summary;
+  std::string html =
+      fmt::format("<h1>Lightstage report: {}</h1>\n",
+                  escape_html(fs::absolute(in.result_dir).lexically_normal().filename().string()));
+  std::string line;
+  if (s.contains("method"))
+    line += fmt::format("method <b>{}</b>", escape_html(s["method"].get<std::string>()));
+  if (s.contains("pixels_solved") && s.contains("pixels_in_mask"))
+    line += fmt::format(" · {} of {} pixels solved", s["pixels_solved"].dump(), s["pixels_in_mask"].dump());
+  if (s.contains("width") && s.contains("height"))
+    line += fmt::format(" · {}×{}", s["width"].dump(), s["height"].dump());
+  if (s.contains("seconds") && s["seconds"].is_number())
+    line += fmt::format(" · {} s", format_number(s["seconds"].get<double>(), 3));
+  if (!line.empty()) html += "<p>" + line + "</p>\n";
+  if (s.contains("message") && s["message"].is_string())
+    html += "<p>" + escape_html(s["message"].get<std::string>()) + "</p>\n";
+  std::string provenance = "result " + escape_html(in.result_dir.string());
+  if (s.contains("input") && s["input"].is_string())
+    provenance += " · input " + escape_html(s["input"].get<std::string>());
+  if (s.contains("time") && s["time"].is_string())
+    provenance += " · solved " + escape_html(s["time"].get<std::string>());
+  provenance +=
+      " · report by lightstage " + std::string(kVersion) + ", " + escape_html(util::utc_timestamp());
+  html += "<p>" + provenance + "</p>\n";
+  return html;
+}
+
+std::string viewer_section(const SurfaceModel& model, const Inputs& in) {
+  std::vector<Vec3> lights;
+  if (in.stack)
+    for (const auto& frame : in.stack->frames) lights.push_back(frame.light_direction);
+  const ViewerPayload payload = encode_viewer_payload(model, lights, Vec3(-0.4, 0.4, 0.82));
+  std::string model_text =
+      model.kind == ShadingKind::kBiPolynomial
+          ? fmt::format("the fitted {} model: ρ(n·h, l·h) · max(0, n·l)", bipolynomial_name(model.order))
+          : std::string("Lambertian: albedo · max(0, n·l)");
+  std::string html = fmt::format(
+      "<p>Drag on the hemisphere (mouse, pen or finger) to move a distant light; or focus it and use the "
+      "arrow keys "
+      "(Shift: small steps, Home: light at the camera). Shading: {}. The canvas shows the linear value, "
+      "white at {} "
+      "(the albedo picture's scale) × the exposure.</p>\n"
+      "<div class=\"viewer\">\n<canvas id=\"viewer-canvas\" width=\"{}\" height=\"{}\"></canvas>\n"
+      "<div class=\"controls\">\n<canvas id=\"viewer-hemisphere\" width=\"240\" height=\"240\"></canvas>\n"
+      "<span id=\"viewer-readout\"></span>\n"
+      "<label>exposure <input id=\"viewer-exposure\" type=\"range\" min=\"-3\" max=\"3\" step=\"0.1\" "
+      "value=\"0\"> "
+      "(stops)</label>\n<label><input id=\"viewer-srgb\" type=\"checkbox\"> sRGB tone curve</label>\n"
+      "<span id=\"viewer-status\"></span>\n</div>\n</div>\n",
+      escape_html(model_text), format_number(model.display_scale), model.normals.cols, model.normals.rows);
+  html += "<script type=\"application/json\" id=\"lightstage-viewer-meta\">" + payload.meta.dump() +
+          "</script>\n";
+  html += "<script type=\"application/octet-stream\" id=\"lightstage-viewer-data\">" + payload.data_base64 +
+          "</script>\n";
+  return html;
+}
+
+std::string surface_section(const Inputs& in, const io::DecodedNormals& normals, const cv::Mat& albedo) {
+  std::string html = "<div class=\"row\">\n";
+  html +=
+      figure(png_data_uri(normal_colours(normals.normals, normals.valid)), "normal map",
+             "Normals, colour = (n + 1) / 2: red = x (right), green = y (up), blue = z (toward the camera).");
+  html +=
+      figure(png_data_uri(normal_sphere_legend(160)), "reference sphere",
+             "Reference: a sphere's normals in the same code (the light toward the camera is the centre).",
+             "legend");
+  const double scale = in.summary.value("albedo_png_scale", 0.0);
+  const double shown = scale > 0 ? scale : std::max(quantile(albedo, normals.valid, 0.995), 1e-12);
+  html += figure(
+      png_data_uri(grey(albedo, normals.valid, shown)), "albedo",
+      fmt::format("Albedo, white at {} (99.5th percentile of the solved albedo).", format_number(shown)));
+  html += "</div>\n";
+  return html;
+}
+
+std::string depth_section(const cv::Mat& depth, const cv::Mat& valid, const fs::path& surface_dir,
+                          int index) {
+  cv::Mat usable = valid.clone();
+  for (int y = 0; y < depth.rows; ++y)
+    for (int x = 0; x < depth.cols; ++x)
+      if (!std::isfinite(depth.at<float>(y, x)) || depth.at<float>(y, x) == 0)
+        usable.at<std::uint8_t>(y, x) = 0;
+  // The integration's camera (surface.json beside depth.pfm): the depth unit per pixel.
+  double pixel_size = 1.0;
+  bool perspective = false;
+  std::string unit = "depth units";
+  if (fs::exists(surface_dir / "surface.json")) {
+    const auto surface = read_json_file(surface_dir / "surface.json");
+    const auto camera = surface.value("camera", nlohmann::json::object());
+    if (camera.is_object() && camera.value("model", "") == "orthographic") {
+      pixel_size = camera.value("pixel_size", 1.0);
+      unit = pixel_size == 1.0 ? "pixels" : "mm";
+    } else if (camera.is_object() && camera.contains("K") && camera["K"].is_array() &&
+               camera["K"].size() == 9) {
+      // Perspective: a pixel spans depth / fx at the typical depth.
+      const double fx = camera["K"][0].is_number() ? camera["K"][0].get<double>() : 0.0;
+      const double d = quantile(depth, usable, 0.5);
+      if (fx > 0 && d > 0) pixel_size = d / fx;
+      unit = "mm along the optical axis";
+      perspective = true;
+    }
+  }
+  const double low = quantile(depth, usable, 0.0), high = quantile(depth, usable, 1.0);
+  std::string html = "<div class=\"row\">\n";
+  html += figure(png_data_uri(shaded_depth(depth, usable, pixel_size)), "shaded depth",
+                 fmt::format("depth.pfm as a relief lit from the upper left ({} {} per pixel).",
+                             format_number(pixel_size), unit));
+  html += "<figure>" + std::string("<img class=\"map\" src=\"") +
+          png_data_uri(false_colour(depth, usable, low, high, kDepthColormap)) + "\" alt=\"depth\">" +
+          colour_bar_svg(kDepthColormap, low, high,
+                         fmt::format("depth ({}; {})", unit,
+                                     perspective ? "larger = farther" : "larger = nearer the camera"),
+                         fmt::format("bar-{}", index)) +
+          "</figure>\n</div>\n";
+  return html;
+}
+
+std::string lights_section(const Inputs& in) {
+  std::vector<LightSeries> series;
+  std::string extra;
+  bool link = false;
+  if (in.calibration) {
+    const auto& cal = *in.calibration;
+    LightSeries nominal{"nominal (rig)", "#c2410c", true, {}};
+    LightSeries calibrated{"calibrated", "#1d4ed8", false, {}};
+    double sum = 0, worst = 0;
+    std::size_t compared = 0;
+    bool every_nominal = true;
+    for (const auto& light : cal.lights) {
+      if (!light.measured) continue;
+      const std::string label =
+          light.led_id >= 0 ? fmt::format("{} · LED {}", light.image, light.led_id) : light.image;
+      calibrated.lights.push_back({light.direction, label});
+      if (light.nominal_position_mm) {
+        const Vec3 d = (*light.nominal_position_mm - cal.object_position_mm).normalized();
+        nominal.lights.push_back({d, label});
+        const double angle = std::acos(std::clamp(d.dot(light.direction.normalized()), -1.0, 1.0)) * kDeg;
+        sum += angle;
+        worst = std::max(worst, angle);
+        ++compared;
+      } else {
+        every_nominal = false;
+      }
+    }
+    if (every_nominal && !nominal.lights.empty()) {
+      series.push_back(nominal);
+      link = true;
+    }
+    series.push_back(calibrated);
+    extra += fmt::format("<p>Calibration: {} ({} lights measured of {}, directions by {}).</p>\n",
+                         escape_html(in.calibration_file->string()), calibrated.lights.size(),
+                         cal.lights.size(), escape_html(cal.direction_method));
+    if (compared > 0) {
+      extra += fmt::format("<p>Calibrated against nominal: mean {}°, max {}° over {} lights.</p>\n",
+                           format_number(sum / static_cast<double>(compared), 3), format_number(worst, 3),
+                           compared);
+    }
+    if (!every_nominal)
+      extra += note("Some lights have no nominal position: only the calibrated ones are drawn.");
+  }
+  if (in.stack) {
+    LightSeries used{"directions in the stack (used by the solver)", "#15803d", false, {}};
+    if (!series.empty()) used.colour = "#16a34a80";
+    for (const auto& frame : in.stack->frames) {
+      const std::string label =
+          frame.led_id >= 0 ? fmt::format("{} · LED {}", frame.filename, frame.led_id) : frame.filename;
+      used.lights.push_back({frame.light_direction, label});
+    }
+    if (series.empty())
+      series.push_back(used);
+    else
+      series.push_back(used);
+  }
+  if (series.empty()) return {};
+  std::string html =
+      "<div class=\"row\"><figure>" + hemisphere_svg(series, link) +
+      "<figcaption>Seen from the camera: azimuth around (0° = right, 90° = up), elevation from 0° "
+      "at the rim to 90° at the centre. Hover a mark for its image and LED.</figcaption></figure>"
+      "<div>" +
+      extra;
+  if (!in.calibration)
+    html += note("No calibration.json found: only the stack's light directions are drawn.");
+  html += "</div></div>\n";
+  return html;
+}
+
+std::string light_statistics_section(const Inputs& in, const ReportOptions& options,
+                                     std::vector<std::string>& notes) {
+  double threshold = kDefaultShadowThreshold;
+  std::string threshold_source = "the default";
+  if (options.shadow_threshold) {
+    threshold = *options.shadow_threshold;
+    threshold_source = "--shadow-threshold";
+  } else if (const auto it = in.summary.find("parameters"); it != in.summary.end() && it->is_object()) {
+    const double solver = it->value("shadow_threshold", 0.0);
+    if (solver > 0) {
+      threshold = solver;
+      threshold_source = "the solver's";
+    }
+  }
+  RadiometryOptions radiometry;
+  if (const auto it = in.summary.find("radiometry"); it != in.summary.end() && it->is_object())
+    radiometry.clamp_to_one = it->value("clamp_to_one", true);
+  std::vector<LightStatistics> stats;
+  try {
+    stats = light_statistics(*in.stack, threshold, radiometry);
+  } catch (const InputError& e) {
+    notes.push_back(fmt::format("Per-light statistics could not be computed: {}", e.what()));
+    return {};
+  }
+  std::vector<double> means, saturated, shadow;
+  for (const auto& s : stats) {
+    means.push_back(s.mean_value);
+    saturated.push_back(100.0 * s.saturated_share);
+    shadow.push_back(100.0 * s.shadow_share);
+  }
+  std::vector<double> sorted = means;
+  std::sort(sorted.begin(), sorted.end());
+  const double median = sorted.empty() ? 0 : sorted[sorted.size() / 2];
+  std::size_t dark = 0, clipping = 0;
+  for (const auto& s : stats) {
+    if (s.mean_value < 0.05 * median || s.mean_value <= 0) ++dark;
+    if (s.saturated_share > 0.01) ++clipping;
+  }
+  std::string html = fmt::format(
+      "<p>{} lights. Over the mask: mean value (linear, divided by the light's intensity), the share of "
+      "pixels "
+      "with a saturated channel, and the share in shadow (value ≤ {}, {} threshold).</p>\n",
+      stats.size(), format_number(threshold), threshold_source);
+  html += fmt::format(
+      "<p><b>{}</b> · <b>{}</b></p>\n",
+      dark == 0 ? std::string("every light lit the object")
+                : fmt::format("{} light(s) look dark (mean below 5% of the median): did they fire?", dark),
+      clipping == 0 ? std::string("no light clips more than 1% of the object")
+                    : fmt::format("{} light(s) clip more than 1% of the object", clipping));
+  html += "<div class=\"row\"><figure>" +
+          bar_chart_svg(means, 0, "mean value", "light (filenames.txt order)", "#3b6fb6") +
+          "</figure><figure>" + bar_chart_svg(shadow, 100, "shadow share (%)", "light", "#6b7280") +
+          "</figure><figure>" + bar_chart_svg(saturated, 0, "saturated share (%)", "light", "#c2410c") +
+          "</figure></div>\n";
+  html +=
+      "<div class=\"scroll\"><table id=\"light-statistics\"><thead><tr><th>#</th><th "
+      "class=\"text\">image</th>"
+      "<th>LED</th><th>azimuth °</th><th>elevation °</th><th>exposure µs</th><th>gain</th><th>mean value</th>"
+      "<th>saturated</th><th>shadow</th></tr></thead><tbody>\n";
+  for (std::size_t i = 0; i < stats.size(); ++i) {
+    const auto& s = stats[i];
+    html += fmt::format(
+        "<tr><td>{}</td><td "
+        "class=\"text\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>"
+        "<td>{}</td><td>{}</td></tr>\n",
+        i + 1, escape_html(s.file), s.led_id >= 0 ? std::to_string(s.led_id) : "–",
+        format_number(azimuth_deg(s.direction), 4), format_number(elevation_deg(s.direction), 3),
+        s.exposure_us > 0 ? format_number(s.exposure_us, 6) : "unknown", format_number(s.gain, 3),
+        format_number(s.mean_value, 4), percent(s.saturated_share), percent(s.shadow_share));
+  }
+  html += "</tbody></table></div>\n";
+  return html;
+}
+
+std::string residual_section(const Inputs& in, const cv::Mat& valid, std::vector<std::string>& notes) {
+  std::string html = "<div class=\"row\">\n";
+  bool any = false;
+  const auto map_figure = [&](const fs::path& file, const std::string& what, const std::string& caption,
+                              std::optional<double> fixed_high, int index) {
+    if (!fs::exists(file)) return;
+    const cv::Mat values = io::read_pfm(file);
+    if (values.type() != CV_32FC1 || values.size() != valid.size()) {
+      notes.push_back(
+          fmt::format("{}: not a one-channel float map of the result's size; not shown.", file.string()));
+      return;
+    }
+    const double high = fixed_high ? *fixed_high : nice_ceiling(quantile(values, valid, 0.99));
+    html += "<figure><img class=\"map\" src=\"" +
+            png_data_uri(false_colour(values, valid, 0, high, kMagnitudeColormap)) + "\" alt=\"" +
+            escape_html(what) + "\">" +
+            colour_bar_svg(kMagnitudeColormap, 0, high, what, fmt::format("bar-{}", index)) + "<figcaption>" +
+            escape_html(caption) + "</figcaption></figure>\n";
+    any = true;
+  };
+  map_figure(
+      in.result_dir / "residual.pfm", "RMS residual of the fit",
+      "residual.pfm: each pixel's RMS misfit over the observations it used (colour clipped at the 99th "
+      "percentile, rounded up).",
+      std::nullopt, 1);
+  map_figure(in.result_dir / "confidence.pfm", "confidence (1 = the data fit the model)",
+             "confidence.pfm: 1 where the data fit the method's model well.", 1.0, 2);
+  html += "</div>\n";
+  return any ? html : std::string();
+}
+
+std::string error_section(const AngularErrorMap& error, const std::string& source) {
+  const auto& s = error.stats;
+  const double high = nice_ceiling(std::max(quantile(error.degrees, error.valid, 0.95), 0.1));
+  std::vector<float> values;
+  for (int y = 0; y < error.degrees.rows; ++y)
+    for (int x = 0; x < error.degrees.cols; ++x)
+      if (error.valid.at<std::uint8_t>(y, x) != 0) values.push_back(error.degrees.at<float>(y, x));
+  std::string html =
+      fmt::format("<p>Against {} (the DiLiGenT measure: the angle between normals, per pixel).</p>\n",
+                  escape_html(source));
+  html += "<div class=\"row\">\n<figure><img class=\"map\" src=\"" +
+          png_data_uri(false_colour(error.degrees, error.valid, 0, high, kMagnitudeColormap)) +
+          "\" alt=\"angular error map\">" +
+          colour_bar_svg(kMagnitudeColormap, 0, high, "angular error (degrees)", "bar-error") +
+          "<figcaption>Angular error; brightest = " + format_number(high) +
+          "° or more (the 95th percentile, rounded up).</figcaption></figure>\n";
+  html += "<figure>" + histogram_svg(values, high, 40, "angular error (degrees)") +
+          "<figcaption>Histogram of the per-pixel error; the last bar counts the pixels at or above " +
+          format_number(high) + "°.</figcaption></figure>\n";
+  html += fmt::format(
+      "<dl class=\"numbers\" id=\"error-numbers\"><dt>mean</dt><dd>{}°</dd><dt>median</dt><dd>{}°</dd>"
+      "<dt>90th percentile</dt><dd>{}°</dd><dt>max</dt><dd>{}°</dd><dt>pixels compared</dt><dd>{}</dd>"
+      "<dt>without a prediction</dt><dd>{}</dd></dl>\n</div>\n",
+      format_number(s.mean, 4), format_number(s.median, 4), format_number(s.p90, 4), format_number(s.max, 4),
+      s.count, s.missing);
+  return html;
+}
+
+// Ground-truth normals and the mask to compare in, from --gt or the stack.
+std::optional<std::pair<io::DecodedNormals, std::string>> ground_truth(const Inputs& in,
+                                                                       const ReportOptions& options,
+                                                                       cv::Mat& mask) {
+  if (options.ground_truth) {
+    fs::path file = *options.ground_truth;
+    if (fs::is_directory(file)) {
+      if (fs::exists(file / "mask.png")) mask = io::read_mask(file / "mask.png");
+      file /= "Normal_gt.png";
+    }
+    return std::pair{io::read_normal_map(file), file.string()};
+  }
+  if (in.stack && in.stack->ground_truth && !in.stack->ground_truth->normals.empty()) {
+    io::DecodedNormals gt;
+    gt.normals = in.stack->ground_truth->normals;
+    gt.valid = cv::Mat(gt.normals.size(), CV_8UC1, cv::Scalar(0));
+    for (int y = 0; y < gt.normals.rows; ++y)
+      for (int x = 0; x < gt.normals.cols; ++x)
+        if (cv::norm(gt.normals.at<cv::Vec3f>(y, x)) > 0) gt.valid.at<std::uint8_t>(y, x) = 255;
+    mask = in.stack->mask;
+    return std::pair{gt, (*in.stack_dir / "Normal_gt.png").string()};
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+void ReportOptions::check() const {
+  if (viewer_max_pixels < 1) fail("report: viewer_max_pixels must be ≥ 1, got {}", viewer_max_pixels);
+  if (shadow_threshold && (!(*shadow_threshold >= 0) || !std::isfinite(*shadow_threshold)))
+    fail("report: shadow_threshold must be a number ≥ 0, got {}", *shadow_threshold);
+  if (ground_truth && !fs::exists(*ground_truth))
+    fail("--gt {}: no such file or folder", ground_truth->string());
+  if (calibration && !fs::exists(*calibration)) fail("--calibration {}: no such file", calibration->string());
+}
+
+nlohmann::json ReportSummary::to_json() const {
+  return {{"file", file.string()}, {"bytes", bytes}, {"sections", sections}, {"notes", notes}};
+}
+
+std::string render_report(const fs::path& result_dir, const ReportOptions& options, ReportSummary* summary) {
+  options.check();
+  if (!fs::is_directory(result_dir)) fail("{}: not a folder (expected a solve result)", result_dir.string());
+  if (!fs::exists(result_dir / "normal.png"))
+    fail("{}: no normal.png: not a solve result folder", (result_dir / "normal.png").string());
+  Inputs in;
+  in.result_dir = result_dir;
+  load_inputs(in, options);
+
+  const io::DecodedNormals normals = io::read_normal_map(result_dir / "normal.png");
+  Page page;
+
+  // The viewer first: it is what people come for.
+  const SurfaceModel model = load_surface_model(result_dir, in.summary, options.viewer_max_pixels, in.notes);
+  page.section("viewer", "Relighting viewer", viewer_section(model, in));
+
+  cv::Mat albedo_full;
+  if (fs::exists(result_dir / "albedo.pfm")) {
+    albedo_full = io::read_pfm(result_dir / "albedo.pfm");
+  }
+  if (albedo_full.type() != CV_32FC1 || albedo_full.size() != normals.normals.size()) {
+    albedo_full = cv::Mat(normals.normals.size(), CV_32FC1, cv::Scalar(0));
+    // model.albedo is the full map when stride is 1; else fall back to albedo.png.
+    if (model.stride == 1)
+      albedo_full = model.albedo;
+    else if (fs::exists(result_dir / "albedo.png")) {
+      const cv::Mat png = io::read_image(result_dir / "albedo.png");
+      png.convertTo(albedo_full, CV_32FC1, model.display_scale / (png.depth() == CV_16U ? 65535.0 : 255.0));
+    }
+  }
+  page.section("surface", "Normals and albedo", surface_section(in, normals, albedo_full));
+
+  // Depth: --depth (a depth.pfm, or a `lightstage integrate` folder), else RESULT_DIR/depth.pfm.
+  fs::path depth_file = result_dir / "depth.pfm";
+  if (options.depth)
+    depth_file = fs::is_directory(*options.depth) ? *options.depth / "depth.pfm" : *options.depth;
+  if (fs::exists(depth_file)) {
+    const cv::Mat depth = io::read_pfm(depth_file);
+    if (depth.type() != CV_32FC1 || depth.size() != normals.normals.size()) {
+      if (options.depth)
+        fail(
+            "{}: depth must be one float channel of {}x{} (the normal map's size), got {} channel(s) of "
+            "{}x{}",
+            depth_file.string(), normals.normals.cols, normals.normals.rows, depth.channels(), depth.cols,
+            depth.rows);
+      in.notes.push_back(fmt::format("{} is not one float channel of the normal map's size; not shown.",
+                                     depth_file.string()));
+    } else {
+      page.section("depth", "Depth", depth_section(depth, normals.valid, depth_file.parent_path(), 0));
+    }
+  } else if (options.depth) {
+    fail("--depth {}: no depth.pfm there", options.depth->string());
+  } else {
+    in.notes.push_back(
+        "No depth.pfm in the result folder (run `lightstage integrate`, then give its folder with --depth): "
+        "no depth "
+        "relief.");
+  }
+
+  if (const std::string lights = lights_section(in); !lights.empty()) {
+    page.section("lights", "Lights on the hemisphere", lights);
+  }
+
+  if (in.stack && options.light_statistics) {
+    if (const std::string html = light_statistics_section(in, options, in.notes); !html.empty())
+      page.section("light-statistics", "Per-light statistics", html);
+  } else if (!options.light_statistics) {
+    in.notes.push_back("Per-light statistics were not asked for.");
+  } else {
+    in.notes.push_back(
+        "Per-light statistics (exposure, saturation and shadow share) need the input stack, which was not "
+        "found.");
+  }
+
+  if (const std::string html = residual_section(in, normals.valid, in.notes); !html.empty())
+    page.section("residual", "Residual and confidence", html);
+  else
+    in.notes.push_back("No residual.pfm or confidence.pfm in the result folder.");
+
+  cv::Mat mask;
+  if (const auto gt = ground_truth(in, options, mask)) {
+    if (gt->first.normals.size() != normals.normals.size())
+      fail("{}: ground truth is {}x{}, the result {}x{}", gt->second, gt->first.normals.cols,
+           gt->first.normals.rows, normals.normals.cols, normals.normals.rows);
+    if (mask.empty() || mask.size() != gt->first.valid.size()) mask = gt->first.valid;
+    const AngularErrorMap error = angular_error(normals.normals, gt->first.normals, mask);
+    page.section("error", "Angular error against ground truth", error_section(error, gt->second));
+  } else {
+    in.notes.push_back("No ground truth (Normal_gt.png in the input stack, or --gt): no error map.");
+  }
+
+  std::string notes_html;
+  for (const auto& n : in.notes) notes_html += "<li>" + escape_html(n) + "</li>\n";
+  if (!notes_html.empty()) page.section("notes", "Notes", "<ul>\n" + notes_html + "</ul>\n");
+
+  std::string html =
+      "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+      "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+      "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; img-src data:; "
+      "style-src 'unsafe-inline'; script-src 'unsafe-inline'; connect-src data:\">\n";
+  html += "<title>Lightstage report: " +
+          escape_html(fs::absolute(result_dir).lexically_normal().filename().string()) +
+          "</title>\n<style>\n" + web::kReportCss + "</style>\n</head>\n<body>\n<header>\n" +
+          header_html(in) + "<nav>" + page.nav() + "</nav>\n</header>\n<main>\n" + page.body() + "</main>\n";
+  html += "<script type=\"module\">\n" + std::string(web::kViewerScript) + "</script>\n</body>\n</html>\n";
+  if (summary) {
+    summary->sections = page.sections();
+    summary->notes = in.notes;
+  }
+  return html;
+}
+
+ReportSummary write_report(const fs::path& result_dir, const fs::path& out, const ReportOptions& options) {
+  ReportSummary summary;
+  const std::string html = render_report(result_dir, options, &summary);
+  summary.file = out.empty() ? result_dir / "report.html" : out;
+  if (summary.file.has_parent_path()) {
+    std::error_code error;
+    fs::create_directories(summary.file.parent_path(), error);
+    if (error) fail("{}: cannot create folder: {}", summary.file.parent_path().string(), error.message());
+  }
+  util::write_text_atomic(summary.file, html);
+  summary.bytes = html.size();
+  logger("host")->debug("report: wrote {} ({:.1f} MB, sections: {})", summary.file.string(),
+                        static_cast<double>(summary.bytes) / 1e6, fmt::join(summary.sections, ", "));
+  return summary;
+}
+
+}  // namespace lightstage::report

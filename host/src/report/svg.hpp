@@ -1,0 +1,45 @@
+#pragma once
+// The report's plots, written as inline SVG by our own code: the lights on
+// the hemisphere, histograms, bar charts and colour bars.
+
+#include "lightstage/common/geometry.hpp"
+
+#include <string>
+#include <vector>
+
+namespace lightstage::report {
+
+struct PlotLight {
+  Vec3 direction = Vec3::UnitZ();  // object -> light, camera frame (x right, y up, z to the camera)
+  std::string label;               // shown on hover, e.g. "001.png · LED 17"
+};
+
+struct LightSeries {
+  std::string name;    // legend text
+  std::string colour;  // CSS colour
+  bool cross = false;  // marker: false = filled dot, true = cross
+  std::vector<PlotLight> lights;
+};
+
+// A polar plot of the hemisphere seen from the camera: azimuth around (0° =
+// +x, to the right; 90° = +y, up), elevation from 0° at the rim to 90° at the
+// centre. When `link_first_two`, light i of series 0 and 1 are joined by a line
+// (nominal -> calibrated).
+std::string hemisphere_svg(const std::vector<LightSeries>& series, bool link_first_two, int size = 440);
+
+// A histogram of `values` over [0, high] in `bins` bins, values above `high`
+// counted in a last, marked bin.
+std::string histogram_svg(const std::vector<float>& values, double high, int bins,
+                          const std::string& x_label);
+
+// Bars, one per entry, against their index (1-based labels); `high` is the
+// top of the y axis (≤ 0: the largest value).
+std::string bar_chart_svg(const std::vector<double>& values, double high, const std::string& y_label,
+                          const std::string& x_label, const std::string& colour);
+
+// A horizontal colour bar of an OpenCV colour map from `low` to `high`; `id`
+// names its gradient and must be unique in the page.
+std::string colour_bar_svg(int colormap, double low, double high, const std::string& label,
+                           const std::string& id);
+
+}  // namespace lightstage::report

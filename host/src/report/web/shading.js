@@ -1,0 +1,123 @@
+// The viewer's shading: the same per-pixel models as the host's C++
+// (host/include/lightstage/host/report/viewer_data.hpp, and the bi-polynomial
+// model of host/include/lightstage/host/reflectance/bipolynomial_model.hpp).
+// Camera frame: x right, y up, z toward the camera; viewer v = (0, 0, 1);
+// light directions point from the object to the light; image row 0 is the top.
+//
+//   lambertian:    value = albedo · max(0, n·l)
+//   bipolynomial:  value = max(0, ρ(n·h, l·h)) · max(0, n·l),  h = normalise(l + v),
+//                  ρ(x, y) = Σ_i Σ_j C_ij x^i y^j, C_ij at index i·(k+1) + j
+//
+// Display: byte = round(255 · clamp01((exposure · value / scale)^(1/γ))) with
+// γ = 1 (linear, the default, what `lightstage relight` writes) or the sRGB curve.
+
+export function normalise(v) {
+  const length = Math.hypot(v[0], v[1], v[2]);
+  if (!(length > 0)) return [0, 0, 1];
+  return [v[0] / length, v[1] / length, v[2] / length];
+}
+
+// ρ(x, y) of one pixel's coefficients (order k, (k+1)² terms starting at `offset`).
+export function evaluateBiPolynomial(order, coefficients, offset, x, y) {
+  const n = order + 1;
+  let result = 0;
+  for (let i = n - 1; i >= 0; --i) {
+    let row = 0;
+    for (let j = n - 1; j >= 0; --j) row = row * y + coefficients[offset + i * n + j];
+    result = result * x + row;
+  }
+  return result;
+}
+
+// Decodes the payload's normals (uint16, the normal.png encoding, 0 0 0 = none)
+// into unit float normals and a validity mask, as io::decode_normal_map does.
+export function decodeNormals(encoded, count) {
+  const normals = new Float32Array(count * 3);
+  const valid = new Uint8Array(count);
+  for (let p = 0; p < count; ++p) {
+    const ex = encoded[3 * p], ey = encoded[3 * p + 1], ez = encoded[3 * p + 2];
+    if (ex === 0 && ey === 0 && ez === 0) continue;
+    const x = (ex / 65535) * 2 - 1, y = (ey / 65535) * 2 - 1, z = (ez / 65535) * 2 - 1;
+    const length = Math.hypot(x, y, z);
+    if (!(length > 0)) continue;
+    normals[3 * p] = x / length;
+    normals[3 * p + 1] = y / length;
+    normals[3 * p + 2] = z / length;
+    valid[p] = 1;
+  }
+  return { normals, valid };
+}
+
+// Linear radiance of every pixel under the unit light `light` into `out`
+// (Float32Array of width·height; 0 where there is no normal).
+export function renderRadiance(surface, light, out) {
+  const l = normalise(light);
+  const { normals, valid, albedo, coefficients, model } = surface;
+  const count = valid.length;
+  const bipolynomial = model.kind === 'bipolynomial' && coefficients;
+  const order = bipolynomial ? model.order : 0;
+  const terms = bipolynomial ? (order + 1) * (order + 1) : 0;
+  const h = normalise([l[0], l[1], l[2] + 1]);
+  const lh = l[0] * h[0] + l[1] * h[1] + l[2] * h[2];
+  for (let p = 0; p < count; ++p) {
+    if (!valid[p]) {
+      out[p] = 0;
+      continue;
+    }
+    const nx = normals[3 * p], ny = normals[3 * p + 1], nz = normals[3 * p + 2];
+    const nl = nx * l[0] + ny * l[1] + nz * l[2];
+    if (!(nl > 0)) {
+      out[p] = 0;
+      continue;
+    }
+    let rho;
+    if (bipolynomial) {
+      const nh = nx * h[0] + ny * h[1] + nz * h[2];
+      rho = Math.max(0, evaluateBiPolynomial(order, coefficients, p * terms, nh, lh));  // ρ clamped to ≥ 0
+    } else {
+      rho = albedo[p];
+    }
+    out[p] = rho * nl;
+  }
+  return out;
+}
+
+function srgbEncode(v) {
+  return v <= 0.0031308 ? 12.92 * v : 1.055 * Math.pow(v, 1 / 2.4) - 0.055;
+}
+
+// Radiance to RGBA bytes (grey) for a canvas ImageData. Pixels without a
+// normal get alpha 0.
+export function toDisplay(radiance, valid, display, rgba) {
+  const factor = (display.exposure ?? 1) / (display.scale > 0 ? display.scale : 1);
+  const srgb = display.gamma === 'srgb';
+  for (let p = 0; p < radiance.length; ++p) {
+    let v = radiance[p] * factor;
+    v = v > 1 ? 1 : v > 0 ? v : 0;
+    if (srgb) v = srgbEncode(v);
+    const byte = Math.round(v * 255);
+    rgba[4 * p] = byte;
+    rgba[4 * p + 1] = byte;
+    rgba[4 * p + 2] = byte;
+    rgba[4 * p + 3] = valid[p] ? 255 : 0;
+  }
+  return rgba;
+}
+
+// Light direction ↔ position on the hemisphere widget (orthographic view from
+// the camera: disc x right, y up, the centre is the light at the camera).
+export function lightFromDisc(x, y) {
+  const r2 = x * x + y * y;
+  if (r2 >= 1) {
+    const r = Math.sqrt(r2);
+    return [x / r, y / r, 0];
+  }
+  return [x, y, Math.sqrt(1 - r2)];
+}
+
+export function azimuthElevationDeg(l) {
+  const v = normalise(l);
+  const azimuth = (Math.atan2(v[1], v[0]) * 180) / Math.PI;
+  const elevation = (Math.asin(Math.max(-1, Math.min(1, v[2]))) * 180) / Math.PI;
+  return { azimuth: (azimuth + 360) % 360, elevation };
+}

@@ -1,0 +1,122 @@
+#include "lightstage/host/solvers/auto.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/common/geometry.hpp"
+#include "lightstage/host/reflectance/bipolynomial_model.hpp"
+#include "solvers/pixel_driver.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace lightstage {
+
+void AutoOptions::check() const {
+  bipolynomial.check();
+  monotonic.check();
+  if (bipolynomial.order != 2)
+    fail("AutoOptions.bipolynomial.order: auto uses the biquadratic layout, got {}", bipolynomial.order);
+  if (!(agreement_deg > 0 && agreement_deg <= 90))
+    fail("AutoOptions.agreement_deg: must be in (0, 90], got {}", agreement_deg);
+  if (!(monotonic_margin >= 0 && monotonic_margin <= 1))
+    fail("AutoOptions.monotonic_margin: must be in [0, 1], got {}", monotonic_margin);
+  if (threads < 0)
+    fail("AutoOptions.threads (--threads): must be 0 (automatic) or positive, got {}", threads);
+}
+
+nlohmann::json AutoOptions::to_json() const {
+  return {{"bipolynomial", bipolynomial.to_json()}, {"monotonic", monotonic.to_json()},
+          {"agreement_deg", agreement_deg},         {"monotonic_margin", monotonic_margin},
+          {"select_order", select_order},           {"threads", threads}};
+}
+
+SolveResult solve_auto(const Observations& observations, const AutoOptions& options) {
+  options.check();
+  BiPolynomialOptions bipolynomial = options.bipolynomial;
+  MonotonicOptions monotonic = options.monotonic;
+  bipolynomial.threads = monotonic.threads = options.threads;
+  detail::DriverSettings settings;
+  settings.method = "auto";
+  settings.threads = options.threads;
+  settings.drop_saturated = bipolynomial.drop_saturated;
+  settings.coefficient_count = bipolynomial_term_count(bipolynomial.order);
+  SolveResult result;
+  BiPolynomialOptions bilinear = bipolynomial;
+  bilinear.order = 1;
+  struct Workspace {
+    BiPolynomialWorkspace bipolynomial;
+    MonotonicWorkspace monotonic;
+  };
+  detail::run_per_pixel(
+      observations, settings,
+      [&]() -> detail::PixelCore {
+        auto ws = std::make_shared<Workspace>();
+        return [ws, &bipolynomial, &bilinear, &monotonic, &options](const PixelObservations& pixel,
+                                                                    std::size_t, detail::PixelOutcome& out) {
+          BiPolynomialPixelFit fit = fit_bipolynomial_pixel(pixel, bipolynomial, ws->bipolynomial);
+          if (fit.status == BiPolynomialPixelFit::Status::kTooFewObservations) {
+            out.status = detail::PixelOutcome::Status::kTooFewObservations;
+            return;
+          }
+          if (fit.status != BiPolynomialPixelFit::Status::kSolved) return;
+          if (options.select_order) {
+            const BiPolynomialPixelFit linear = fit_bipolynomial_pixel(pixel, bilinear, ws->bipolynomial);
+            auto bic = [](const BiPolynomialPixelFit& f, int terms) {
+              const double m = f.kept;
+              return m * std::log(std::max(f.rms * f.rms, 1e-300)) + terms * std::log(m);
+            };
+            if (linear.status == BiPolynomialPixelFit::Status::kSolved && linear.kept == fit.kept &&
+                bic(linear, 4) < bic(fit, 9)) {
+              // The biquadratic layout: C_ij at i·3 + j.
+              Eigen::VectorXd c = Eigen::VectorXd::Zero(9);
+              c(0) = linear.coefficients(0);
+              c(1) = linear.coefficients(1);
+              c(3) = linear.coefficients(2);
+              c(4) = linear.coefficients(3);
+              fit = linear;
+              fit.coefficients = c;
+            }
+          }
+          const Eigen::Vector3d nb = fit.normal;
+          const double phi = std::atan2(nb.y(), nb.x());
+          prepare_monotonic(pixel, ws->monotonic);
+          const ElevationEstimate e = search_elevation(phi, monotonic, ws->monotonic);
+          Eigen::Vector3d nm = direction_from_elevation_azimuth(e.elevation, phi);
+          if (monotonic.refine_step_deg > 0)
+            nm = refine_normal(nm, monotonic.refine_step_deg, monotonic, ws->monotonic);
+          const double apart_deg = deg_from_rad(std::atan2(nb.cross(nm).norm(), nb.dot(nm)));
+          Eigen::Vector3d n = nb;
+          if (apart_deg <= options.agreement_deg) {
+            n = (nb + nm).normalized();
+          } else {
+            const double sm = profile_monotonicity(pixel, nm, monotonic.shadow_threshold);
+            const double sb = profile_monotonicity(pixel, nb, monotonic.shadow_threshold);
+            if (sm - sb >= options.monotonic_margin) n = nm;
+          }
+          out.status = detail::PixelOutcome::Status::kSolved;
+          out.normal = n;
+          out.albedo = fit.albedo;
+          out.residual = fit.rms;
+          out.confidence = std::clamp(1.0 - apart_deg / 10.0, 0.0, 1.0);
+          out.coefficients = fit.coefficients;
+          out.iterations = fit.iterations;
+        };
+      },
+      result);
+  result.parameters = options.to_json();
+  result.reflectance = {{"model", "bipolynomial"},
+                        {"name", bipolynomial_name(bipolynomial.order)},
+                        {"order", bipolynomial.order},
+                        {"terms", bipolynomial_term_names(bipolynomial.order)},
+                        {"x", "n.h"},
+                        {"y", "l.h"}};
+  const SolveSummary& s = result.summary;
+  result.summary.message = fmt::format(
+      "auto ({} + monotonic): solved {} of {} pixels in {:.2f} s ({} too few observations, {} degenerate)",
+      bipolynomial_name(bipolynomial.order), s.pixels_solved, s.pixels_in_mask, s.seconds,
+      s.pixels_rejected_too_few_observations, s.pixels_rejected_degenerate);
+  return result;
+}
+
+}  // namespace lightstage

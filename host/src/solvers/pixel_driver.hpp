@@ -1,0 +1,44 @@
+#pragma once
+// The loop every per-pixel method shares: load each pixel's observations
+// (per-pixel lights when near lights are set), run the method's core on a
+// worker thread, write the maps and count what was solved or rejected.
+
+#include "lightstage/host/solvers/pixel_observations.hpp"
+#include "lightstage/host/solvers/solve_result.hpp"
+
+#include <Eigen/Core>
+
+#include <functional>
+#include <string>
+
+namespace lightstage::detail {
+
+struct PixelOutcome {
+  enum class Status { kSolved, kTooFewObservations, kDegenerate };
+  Status status = Status::kDegenerate;
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  double albedo = 0;
+  double residual = 0;           // RMS over the observations the method used
+  double confidence = 0;         // [0, 1]
+  Eigen::VectorXd coefficients;  // size = coefficient_count of the run
+  int iterations = 0;
+};
+
+// A core solves one pixel; each worker thread gets its own (own workspace).
+using PixelCore = std::function<void(const PixelObservations&, std::size_t pixel, PixelOutcome&)>;
+
+struct DriverSettings {
+  std::string method;          // summary.method
+  int threads = 0;             // 0 = hardware concurrency
+  bool drop_saturated = true;  // passed to load_pixel
+  int coefficient_count = 0;   // > 0: a CV_32FC(k) coefficient map is written
+};
+
+// Runs `make_core()` once per worker and the core once per pixel. Fills every
+// map of the result (normals, albedo, residual, solved, confidence and, when
+// asked, coefficients) and the summary counts; the caller adds parameters,
+// reflectance and the message. Returns the mean iterations over solved pixels.
+double run_per_pixel(const Observations& observations, const DriverSettings& settings,
+                     const std::function<PixelCore()>& make_core, SolveResult& result);
+
+}  // namespace lightstage::detail

@@ -1,0 +1,224 @@
+#include "lightstage/host/solvers/robust.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "solvers/lambert_fit.hpp"
+#include "solvers/pixel_driver.hpp"
+
+#include <fmt/format.h>
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace lightstage {
+
+const char* robust_estimator_name(RobustEstimator estimator) {
+  switch (estimator) {
+    case RobustEstimator::kNone:
+      return "none";
+    case RobustEstimator::kIrlsL1:
+      return "irls-l1";
+    case RobustEstimator::kRansac:
+      return "ransac";
+  }
+  return "?";
+}
+
+RobustEstimator parse_robust_estimator(const std::string& text) {
+  if (text == "none") return RobustEstimator::kNone;
+  if (text == "irls-l1") return RobustEstimator::kIrlsL1;
+  if (text == "ransac") return RobustEstimator::kRansac;
+  fail("--estimator: unknown robust estimator '{}' (none, irls-l1, ransac)", text);
+}
+
+void RobustOptions::check() const {
+  if (!(std::isfinite(shadow_threshold) && shadow_threshold >= 0))
+    fail("RobustOptions.shadow_threshold (--shadow-threshold): must be finite and >= 0, got {}",
+         shadow_threshold);
+  if (!(t_low > 0 && t_low <= 1)) fail("RobustOptions.t_low (--t-low): must be in (0, 1], got {}", t_low);
+  if (irls_iterations < 1) fail("RobustOptions.irls_iterations: must be at least 1, got {}", irls_iterations);
+  if (!(irls_epsilon > 0 && std::isfinite(irls_epsilon)))
+    fail("RobustOptions.irls_epsilon: must be positive, got {}", irls_epsilon);
+  if (ransac_iterations < 1)
+    fail("RobustOptions.ransac_iterations: must be at least 1, got {}", ransac_iterations);
+  if (!(ransac_threshold > 0 && std::isfinite(ransac_threshold)))
+    fail("RobustOptions.ransac_threshold: must be positive, got {}", ransac_threshold);
+  if (min_observations < 3)
+    fail("RobustOptions.min_observations (--min-observations): must be at least 3, got {}", min_observations);
+  if (threads < 0)
+    fail("RobustOptions.threads (--threads): must be 0 (automatic) or positive, got {}", threads);
+}
+
+nlohmann::json RobustOptions::to_json() const {
+  return {{"shadow_threshold", shadow_threshold},
+          {"t_low", t_low},
+          {"estimator", robust_estimator_name(estimator)},
+          {"irls_iterations", irls_iterations},
+          {"irls_epsilon", irls_epsilon},
+          {"ransac_iterations", ransac_iterations},
+          {"ransac_threshold", ransac_threshold},
+          {"seed", seed},
+          {"min_observations", min_observations},
+          {"drop_saturated", drop_saturated},
+          {"threads", threads}};
+}
+
+namespace {
+
+double median_of(const PixelObservations& pixel, const std::vector<Eigen::Index>& kept,
+                 std::vector<double>& scratch) {
+  scratch.clear();
+  for (const Eigen::Index j : kept) scratch.push_back(pixel.values(j));
+  const auto mid = scratch.begin() + static_cast<std::ptrdiff_t>(scratch.size() / 2);
+  std::nth_element(scratch.begin(), mid, scratch.end());
+  return *mid;
+}
+
+bool irls_l1(const PixelObservations& pixel, const RobustOptions& options, double scale, RobustWorkspace& ws,
+             Eigen::Vector3d& s) {
+  const double epsilon = options.irls_epsilon * scale;
+  ws.weights.setZero(pixel.count());
+  for (int it = 0; it < options.irls_iterations; ++it) {
+    for (const Eigen::Index j : ws.kept)
+      ws.weights(j) = 1.0 / std::max(std::abs(pixel.lights.row(j).dot(s) - pixel.values(j)), epsilon);
+    Eigen::Vector3d next;
+    if (!detail::lambert_fit(pixel.lights, pixel.values, ws.kept, next, &ws.weights)) return true;
+    const double change = (next - s).norm();
+    s = next;
+    if (change < 1e-9 * std::max(s.norm(), 1e-12)) break;
+  }
+  return true;
+}
+
+bool ransac(const PixelObservations& pixel, const RobustOptions& options, std::size_t pixel_index,
+            double band, RobustWorkspace& ws, Eigen::Vector3d& s) {
+  std::mt19937_64 rng(options.seed * 0x9E3779B97F4A7C15ULL + pixel_index);
+  const std::size_t m = ws.kept.size();
+  std::uniform_int_distribution<std::size_t> pick(0, m - 1);
+  std::size_t best_count = 0;
+  double best_error = 0;
+  Eigen::Vector3d best = s;
+  for (int it = 0; it < options.ransac_iterations; ++it) {
+    const std::size_t a = pick(rng), b = pick(rng), c = pick(rng);
+    if (a == b || b == c || a == c) continue;
+    Eigen::Matrix3d l;
+    l.row(0) = pixel.lights.row(ws.kept[a]);
+    l.row(1) = pixel.lights.row(ws.kept[b]);
+    l.row(2) = pixel.lights.row(ws.kept[c]);
+    if (std::abs(l.determinant()) < 1e-6) continue;
+    const Eigen::Vector3d candidate = l.partialPivLu().solve(
+        Eigen::Vector3d(pixel.values(ws.kept[a]), pixel.values(ws.kept[b]), pixel.values(ws.kept[c])));
+    std::size_t count = 0;
+    double error = 0;
+    for (const Eigen::Index j : ws.kept) {
+      const double r = std::abs(pixel.lights.row(j).dot(candidate) - pixel.values(j));
+      if (r < band) {
+        ++count;
+        error += r;
+      }
+    }
+    if (count > best_count || (count == best_count && error < best_error)) {
+      best_count = count;
+      best_error = error;
+      best = candidate;
+    }
+  }
+  if (best_count < 3) return true;  // keep the least-squares start
+  ws.inliers.clear();
+  for (const Eigen::Index j : ws.kept) {
+    if (std::abs(pixel.lights.row(j).dot(best) - pixel.values(j)) < band) ws.inliers.push_back(j);
+  }
+  Eigen::Vector3d refit;
+  s = detail::lambert_fit(pixel.lights, pixel.values, ws.inliers, refit) ? refit : best;
+  return true;
+}
+
+}  // namespace
+
+RobustPixelFit fit_robust_pixel(const PixelObservations& pixel, const RobustOptions& options,
+                                std::size_t pixel_index, RobustWorkspace& ws) {
+  RobustPixelFit fit;
+  ws.kept.clear();
+  for (Eigen::Index j = 0; j < pixel.count(); ++j) {
+    if (pixel.usable[static_cast<std::size_t>(j)] && pixel.values(j) > options.shadow_threshold)
+      ws.kept.push_back(j);
+  }
+  if (options.t_low < 1.0) {
+    std::stable_sort(ws.kept.begin(), ws.kept.end(),
+                     [&](Eigen::Index a, Eigen::Index b) { return pixel.values(a) < pixel.values(b); });
+    const auto keep = std::max<std::size_t>(
+        static_cast<std::size_t>(options.min_observations),
+        static_cast<std::size_t>(std::ceil(options.t_low * static_cast<double>(ws.kept.size()) - 1e-9)));
+    ws.kept.resize(std::min(keep, ws.kept.size()));
+  }
+  if (static_cast<int>(ws.kept.size()) < options.min_observations) {
+    fit.status = RobustPixelFit::Status::kTooFewObservations;
+    return fit;
+  }
+  Eigen::Vector3d s;
+  if (!detail::lambert_fit(pixel.lights, pixel.values, ws.kept, s)) return fit;
+  const double scale = std::max(median_of(pixel, ws.kept, ws.scratch), 1e-12);
+  const double band = options.ransac_threshold * scale;
+  switch (options.estimator) {
+    case RobustEstimator::kNone:
+      break;
+    case RobustEstimator::kIrlsL1:
+      irls_l1(pixel, options, scale, ws, s);
+      break;
+    case RobustEstimator::kRansac:
+      if (ws.kept.size() > 3) ransac(pixel, options, pixel_index, band, ws, s);
+      break;
+  }
+  if (!s.allFinite() || s.norm() < 1e-12) return fit;
+  double squared = 0;
+  std::size_t inside = 0;
+  for (const Eigen::Index j : ws.kept) {
+    const double r = pixel.lights.row(j).dot(s) - pixel.values(j);
+    squared += r * r;
+    if (std::abs(r) < band) ++inside;
+  }
+  fit.status = RobustPixelFit::Status::kSolved;
+  fit.s = s;
+  fit.rms = std::sqrt(squared / static_cast<double>(ws.kept.size()));
+  fit.inlier_fraction = static_cast<double>(inside) / static_cast<double>(ws.kept.size());
+  return fit;
+}
+
+SolveResult solve_robust(const Observations& observations, const RobustOptions& options) {
+  options.check();
+  detail::DriverSettings settings;
+  settings.method = "robust";
+  settings.threads = options.threads;
+  settings.drop_saturated = options.drop_saturated;
+  SolveResult result;
+  detail::run_per_pixel(
+      observations, settings,
+      [&options]() -> detail::PixelCore {
+        auto ws = std::make_shared<RobustWorkspace>();
+        return [ws, &options](const PixelObservations& pixel, std::size_t p, detail::PixelOutcome& out) {
+          const RobustPixelFit fit = fit_robust_pixel(pixel, options, p, *ws);
+          if (fit.status == RobustPixelFit::Status::kTooFewObservations) {
+            out.status = detail::PixelOutcome::Status::kTooFewObservations;
+            return;
+          }
+          if (fit.status != RobustPixelFit::Status::kSolved) return;
+          out.status = detail::PixelOutcome::Status::kSolved;
+          out.normal = fit.s;
+          out.albedo = fit.s.norm();
+          out.residual = fit.rms;
+          out.confidence = fit.inlier_fraction;
+        };
+      },
+      result);
+  result.parameters = options.to_json();
+  const SolveSummary& s = result.summary;
+  result.summary.message = fmt::format(
+      "robust ({}, T_low {:.0f}%): solved {} of {} pixels in {:.2f} s ({} too few observations, {} "
+      "degenerate)",
+      robust_estimator_name(options.estimator), 100 * options.t_low, s.pixels_solved, s.pixels_in_mask,
+      s.seconds, s.pixels_rejected_too_few_observations, s.pixels_rejected_degenerate);
+  return result;
+}
+
+}  // namespace lightstage

@@ -1,0 +1,232 @@
+#include "lightstage/host/solvers/shape_prior.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "solvers/nelder_mead.hpp"
+
+#include <fmt/format.h>
+#include <Eigen/Dense>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <vector>
+
+namespace lightstage {
+namespace {
+
+using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// G: Gaussian smoothing of per-pixel rows over the image, as a normalised
+// convolution restricted to `weight` (so the mask's edge does not pull values
+// toward zero). Rows whose smoothed weight is tiny come back as zero.
+RowMatrix smooth_rows(const RowMatrix& values, const std::vector<cv::Point>& pixels,
+                      const std::vector<double>& weight, cv::Size size, double sigma) {
+  if (sigma <= 0) {
+    RowMatrix out = values;
+    for (Eigen::Index i = 0; i < out.rows(); ++i)
+      if (weight[static_cast<std::size_t>(i)] <= 0) out.row(i).setZero();
+    return out;
+  }
+  const int ksize = 2 * static_cast<int>(std::ceil(3 * sigma)) + 1;
+  cv::Mat w = cv::Mat::zeros(size, CV_64FC1);
+  for (std::size_t i = 0; i < pixels.size(); ++i) w.at<double>(pixels[i]) = weight[i];
+  cv::Mat w_smooth;
+  cv::GaussianBlur(w, w_smooth, cv::Size(ksize, ksize), sigma, sigma, cv::BORDER_CONSTANT);
+  RowMatrix out(values.rows(), values.cols());
+  cv::Mat channel(size, CV_64FC1), smoothed;
+  for (Eigen::Index k = 0; k < values.cols(); ++k) {
+    channel.setTo(0);
+    for (std::size_t i = 0; i < pixels.size(); ++i)
+      channel.at<double>(pixels[i]) = weight[i] * values(static_cast<Eigen::Index>(i), k);
+    cv::GaussianBlur(channel, smoothed, cv::Size(ksize, ksize), sigma, sigma, cv::BORDER_CONSTANT);
+    for (std::size_t i = 0; i < pixels.size(); ++i) {
+      const double ws = w_smooth.at<double>(pixels[i]);
+      out(static_cast<Eigen::Index>(i), k) = ws > 1e-3 ? smoothed.at<double>(pixels[i]) / ws : 0.0;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+void ShapePriorOptions::check() const {
+  if (sh_dimension != 9 && sh_dimension != 16)
+    fail("shape-prior: sh dimension (--sh) must be 9 or 16, got {}", sh_dimension);
+  if (!(smoothing_sigma >= 0) || smoothing_sigma > 100)
+    fail("shape-prior: smoothing sigma must be in [0, 100] pixels, got {}", smoothing_sigma);
+  if (max_evaluations < 0) fail("shape-prior: max_evaluations must not be negative, got {}", max_evaluations);
+  if (refine_pixels < 100) fail("shape-prior: refine_pixels must be at least 100, got {}", refine_pixels);
+  if (!(min_prior_fraction >= 0 && min_prior_fraction <= 1))
+    fail("shape-prior: min_prior_fraction must be in [0, 1], got {}", min_prior_fraction);
+}
+
+nlohmann::json ShapePriorOptions::to_json() const {
+  return {{"sh_dimension", sh_dimension},
+          {"smoothing_sigma", smoothing_sigma},
+          {"refine", refine},
+          {"max_evaluations", max_evaluations},
+          {"refine_pixels", refine_pixels},
+          {"min_prior_fraction", min_prior_fraction}};
+}
+
+SolveResult solve_shape_prior(const Observations& obs, const cv::Mat& prior_normals,
+                              const cv::Mat& prior_valid, const ShapePriorOptions& options) {
+  options.check();
+  const auto start = std::chrono::steady_clock::now();
+  const int k = options.sh_dimension;
+  const Eigen::Index p = static_cast<Eigen::Index>(obs.pixel_count());
+  const Eigen::Index q = obs.intensities.cols();
+  if (q < k) fail("shape-prior: needs at least k = {} images, the stack has {}", k, q);
+  if (p < k) fail("shape-prior: needs at least k = {} pixels in the mask, got {}", k, p);
+  if (prior_normals.type() != CV_32FC3 || prior_normals.size() != obs.size)
+    fail("shape-prior: the prior normals must be CV_32FC3 of the images' size {}x{}", obs.size.width,
+         obs.size.height);
+  if (!prior_valid.empty() && (prior_valid.type() != CV_8UC1 || prior_valid.size() != obs.size))
+    fail("shape-prior: the prior's validity mask must be CV_8UC1 of the images' size");
+
+  // 1. Rank-k factorisation through the small q×q Gram matrix: I = U Σ Vᵀ,
+  //    S̃ = U_k Σ_k^½ = I V_k Σ_k^-½.
+  const RowMatrix I = obs.intensities.cast<double>();
+  const Eigen::MatrixXd gram = I.transpose() * I;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(gram);
+  Eigen::MatrixXd vk(q, k);
+  Eigen::VectorXd sigma(k);
+  for (int j = 0; j < k; ++j) {
+    const Eigen::Index src = q - 1 - j;  // eigenvalues ascend
+    vk.col(j) = eig.eigenvectors().col(src);
+    sigma[j] = std::sqrt(std::max(eig.eigenvalues()[src], 0.0));
+  }
+  if (!(sigma[k - 1] > 1e-12 * sigma[0]))
+    fail("shape-prior: the images span fewer than k = {} dimensions (is the lighting varying?)", k);
+  const RowMatrix S = I * vk * sigma.cwiseSqrt().cwiseInverse().asDiagonal();
+
+  // The prior on the observation rows.
+  RowMatrix N(p, 3);
+  std::vector<double> prior_weight(static_cast<std::size_t>(p), 0.0), all(static_cast<std::size_t>(p), 1.0);
+  Eigen::Index with_prior = 0;
+  for (Eigen::Index i = 0; i < p; ++i) {
+    const cv::Point px = obs.pixels[static_cast<std::size_t>(i)];
+    const cv::Vec3f n = prior_normals.at<cv::Vec3f>(px);
+    const Eigen::Vector3d v(n[0], n[1], n[2]);
+    const bool ok =
+        (prior_valid.empty() || prior_valid.at<std::uint8_t>(px)) && v.allFinite() && v.norm() > 0.5;
+    N.row(i) = ok ? Eigen::RowVector3d(v.normalized().transpose()) : Eigen::RowVector3d::Zero();
+    if (ok) {
+      prior_weight[static_cast<std::size_t>(i)] = 1.0;
+      ++with_prior;
+    }
+  }
+  if (with_prior < k || static_cast<double>(with_prior) < options.min_prior_fraction * static_cast<double>(p))
+    fail("shape-prior: only {} of the mask's {} pixels have a prior normal (need {:.0f}%)", with_prior, p,
+         100 * options.min_prior_fraction);
+
+  // 2. Eq. 4.6 on smoothed data, over pixels with a prior.
+  const RowMatrix GS = smooth_rows(S, obs.pixels, all, obs.size, options.smoothing_sigma);
+  RowMatrix GN = smooth_rows(N, obs.pixels, prior_weight, obs.size, options.smoothing_sigma);
+  std::vector<Eigen::Index> rows;
+  for (Eigen::Index i = 0; i < p; ++i) {
+    const double len = GN.row(i).norm();
+    if (prior_weight[static_cast<std::size_t>(i)] > 0 && len > 0.3) {
+      GN.row(i) /= len;
+      rows.push_back(i);
+    }
+  }
+  if (static_cast<Eigen::Index>(rows.size()) < k)
+    fail("shape-prior: too few pixels with a usable smoothed prior");
+  Eigen::MatrixXd X(static_cast<Eigen::Index>(rows.size()), k), Y(static_cast<Eigen::Index>(rows.size()), 3);
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    X.row(static_cast<Eigen::Index>(r)) = GS.row(rows[r]);
+    Y.row(static_cast<Eigen::Index>(r)) = GN.row(rows[r]);
+  }
+  const Eigen::MatrixXd A0 = X.colPivHouseholderQr().solve(Y);
+
+  // 3. Eq. 4.7 by Nelder–Mead on an even subsample of the same rows.
+  const std::size_t stride =
+      std::max<std::size_t>(1, rows.size() / static_cast<std::size_t>(options.refine_pixels));
+  std::vector<Eigen::Index> sample;
+  for (std::size_t r = 0; r < rows.size(); r += stride) sample.push_back(static_cast<Eigen::Index>(r));
+  Eigen::MatrixXd Xs(static_cast<Eigen::Index>(sample.size()), k),
+      Ys(static_cast<Eigen::Index>(sample.size()), 3);
+  for (std::size_t r = 0; r < sample.size(); ++r) {
+    Xs.row(static_cast<Eigen::Index>(r)) = X.row(sample[r]);
+    Ys.row(static_cast<Eigen::Index>(r)) = Y.row(sample[r]);
+  }
+  auto cost = [&](const Eigen::MatrixXd& A) {
+    const Eigen::MatrixXd M = Xs * A;
+    double sum = 0;
+    for (Eigen::Index i = 0; i < M.rows(); ++i) {
+      const double len = M.row(i).norm();
+      sum += len > 0 ? (M.row(i) / len - Ys.row(i)).squaredNorm() : 4.0;
+    }
+    return sum / static_cast<double>(M.rows());
+  };
+  const double initial_cost = cost(A0);
+  Eigen::MatrixXd A = A0;
+  double final_cost = initial_cost;
+  int evaluations = 0;
+  if (options.refine && options.max_evaluations > 0) {
+    // Column-major parameter vector; steps scaled per column of A.
+    Eigen::VectorXd x0 = Eigen::Map<const Eigen::VectorXd>(A0.data(), A0.size());
+    Eigen::VectorXd step(x0.size());
+    for (int c = 0; c < 3; ++c) {
+      const double scale = std::max(A0.col(c).cwiseAbs().maxCoeff(), 1e-12);
+      for (int r = 0; r < k; ++r) step[c * k + r] = 0.1 * scale;
+    }
+    const auto nm = solvers::nelder_mead(
+        [&](const Eigen::VectorXd& x) { return cost(Eigen::Map<const Eigen::MatrixXd>(x.data(), k, 3)); }, x0,
+        step, options.max_evaluations);
+    evaluations = nm.evaluations;
+    if (nm.value < initial_cost) {
+      A = Eigen::Map<const Eigen::MatrixXd>(nm.x.data(), k, 3);
+      final_cost = nm.value;
+    }
+  }
+
+  // 4. N* = O(S̃ A*); the rank-k reconstruction error as the residual.
+  const Eigen::MatrixXd lighting =
+      sigma.cwiseSqrt().asDiagonal() * vk.transpose();  // k × q: I ≈ S̃ · lighting
+  SolveResult result;
+  result.normals = cv::Mat::zeros(obs.size, CV_32FC3);
+  result.albedo = cv::Mat::zeros(obs.size, CV_32FC1);
+  result.residual = cv::Mat::zeros(obs.size, CV_32FC1);
+  result.solved = cv::Mat::zeros(obs.size, CV_8UC1);
+  std::size_t solved = 0, degenerate = 0;
+  for (Eigen::Index i = 0; i < p; ++i) {
+    const Eigen::RowVector3d m = S.row(i) * A;
+    const double len = m.norm();
+    const cv::Point px = obs.pixels[static_cast<std::size_t>(i)];
+    if (!(len > 0) || !std::isfinite(len)) {
+      ++degenerate;
+      continue;
+    }
+    const Eigen::RowVector3d n = m / len;
+    result.normals.at<cv::Vec3f>(px) =
+        cv::Vec3f(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
+    result.albedo.at<float>(px) = static_cast<float>(len);
+    const double rms = std::sqrt((I.row(i) - S.row(i) * lighting).squaredNorm() / static_cast<double>(q));
+    result.residual.at<float>(px) = static_cast<float>(rms);
+    result.solved.at<std::uint8_t>(px) = 255;
+    ++solved;
+  }
+  std::vector<double> singular(static_cast<std::size_t>(std::min<Eigen::Index>(q, 2 * k)));
+  for (std::size_t j = 0; j < singular.size(); ++j)
+    singular[j] = std::sqrt(std::max(eig.eigenvalues()[q - 1 - static_cast<Eigen::Index>(j)], 0.0));
+  result.parameters = options.to_json();
+  result.parameters["fit"] = {{"prior_pixels", with_prior},  {"fit_pixels", rows.size()},
+                              {"cost_linear", initial_cost}, {"cost_refined", final_cost},
+                              {"evaluations", evaluations},  {"singular_values", singular}};
+  auto& s = result.summary;
+  s.method = "shape-prior";
+  s.pixels_in_mask = static_cast<std::size_t>(p);
+  s.pixels_solved = solved;
+  s.pixels_rejected_degenerate = degenerate;
+  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  s.message = fmt::format(
+      "shape-prior (k = {}): {} of {} pixels solved in {:.2f} s; prior fit cost {:.4g} (linear) -> {:.4g} "
+      "(refined, {} evaluations)",
+      k, solved, p, s.seconds, initial_cost, final_cost, evaluations);
+  return result;
+}
+
+}  // namespace lightstage

@@ -1,0 +1,114 @@
+// Speed of every `solve --method` on one stack, in one run: pixels per second
+// at 2 threads, with l2 and a plain read of the observation matrix (the floor
+// any solver pays) as the yardsticks. The stack: a simulated Cook–Torrance
+// sphere under the 96-LED default dome (distant lights), 192x192.
+//   build/bench/bench_photometric --benchmark_counters_tabular=true
+#include "lightstage/common/rig.hpp"
+#include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/reflectance/bipolynomial_model.hpp"
+#include "lightstage/host/solvers/auto.hpp"
+#include "lightstage/host/solvers/bipolynomial.hpp"
+#include "lightstage/host/solvers/lambertian.hpp"
+#include "lightstage/host/solvers/monotonic.hpp"
+#include "lightstage/host/solvers/robust.hpp"
+#include "lightstage/sim/simulate.hpp"
+
+#include <benchmark/benchmark.h>
+
+#include <thread>
+#include <vector>
+
+namespace lightstage {
+namespace {
+
+constexpr int kThreads = 2;
+
+const Observations& stack() {
+  static const Observations observations = [] {
+    sim::SimulateOptions options;
+    options.scene = "sphere";
+    options.material = "cook-torrance:roughness=0.3,ks=0.5";
+    options.light_model = sim::LightModel::kDistant;
+    options.width = options.height = 192;
+    return make_observations(sim::simulate_stack(load_rig(default_rig_path()), options));
+  }();
+  return observations;
+}
+
+void report(benchmark::State& state) {
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(stack().pixel_count()));
+  state.counters["images"] = static_cast<double>(stack().image_count());
+}
+
+// Reading every observation once (what any solver must at least do), on 2 threads.
+void BM_ReadStack(benchmark::State& state) {
+  const Observations& obs = stack();
+  for (auto _ : state) {
+    double sums[kThreads] = {};
+    std::vector<std::thread> workers;
+    const Eigen::Index rows = obs.intensities.rows();
+    for (int t = 0; t < kThreads; ++t) {
+      workers.emplace_back([&, t] {
+        const Eigen::Index begin = rows * t / kThreads, end = rows * (t + 1) / kThreads;
+        sums[t] = obs.intensities.middleRows(begin, end - begin).cast<double>().sum();
+      });
+    }
+    for (auto& w : workers) w.join();
+    benchmark::DoNotOptimize(sums[0] + sums[1]);
+  }
+  report(state);
+}
+BENCHMARK(BM_ReadStack)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_L2(benchmark::State& state) {
+  L2Options options;
+  options.threads = kThreads;
+  for (auto _ : state) benchmark::DoNotOptimize(solve_lambertian(stack(), options));
+  report(state);
+}
+BENCHMARK(BM_L2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Robust(benchmark::State& state) {
+  RobustOptions options;
+  options.threads = kThreads;
+  options.estimator = static_cast<RobustEstimator>(state.range(0));
+  for (auto _ : state) benchmark::DoNotOptimize(solve_robust(stack(), options));
+  report(state);
+  state.SetLabel(robust_estimator_name(options.estimator));
+}
+BENCHMARK(BM_Robust)
+    ->Arg(static_cast<int>(RobustEstimator::kIrlsL1))
+    ->Arg(static_cast<int>(RobustEstimator::kRansac))
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+void BM_BiPolynomial(benchmark::State& state) {
+  BiPolynomialOptions options;
+  options.threads = kThreads;
+  options.order = static_cast<int>(state.range(0));
+  for (auto _ : state) benchmark::DoNotOptimize(solve_bipolynomial(stack(), options));
+  report(state);
+  state.SetLabel(bipolynomial_name(options.order));
+}
+BENCHMARK(BM_BiPolynomial)->DenseRange(1, 3)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Monotonic(benchmark::State& state) {
+  MonotonicOptions options;
+  options.threads = kThreads;
+  for (auto _ : state) benchmark::DoNotOptimize(solve_monotonic(stack(), options));
+  report(state);
+}
+BENCHMARK(BM_Monotonic)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+
+void BM_Auto(benchmark::State& state) {
+  AutoOptions options;
+  options.threads = kThreads;
+  for (auto _ : state) benchmark::DoNotOptimize(solve_auto(stack(), options));
+  report(state);
+}
+BENCHMARK(BM_Auto)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+
+}  // namespace
+}  // namespace lightstage
+
+BENCHMARK_MAIN();

@@ -1,0 +1,184 @@
+// Light calibration beyond directions, on simulated stacks: bad input named
+// in the errors, intensities from a matte sphere and a flat target against
+// the rig's true relative intensities, and near-light Lambertian solving
+// with calibrated LED positions against distant-light solving.
+#include "lightstage/common/error.hpp"
+#include "lightstage/common/rig.hpp"
+#include "lightstage/host/calibration/apply_calibration.hpp"
+#include "lightstage/host/calibration/calibrate_lights.hpp"
+#include "lightstage/host/calibration/calibration_output.hpp"
+#include "lightstage/host/eval/angular_error.hpp"
+#include "lightstage/host/io/image_io.hpp"
+#include "lightstage/host/io/stack_io.hpp"
+#include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/solvers/lambertian.hpp"
+#include "lightstage/sim/simulate.hpp"
+#include "lightstage/testing/errors.hpp"
+#include "lightstage/testing/paths.hpp"
+
+#include <gtest/gtest.h>
+
+namespace lightstage::calibration {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::error_of;
+
+void write_sim_stack(const Rig& rig, const std::string& scene, const fs::path& dir,
+                     std::optional<int> width) {
+  sim::SimulateOptions o;
+  o.scene = scene;
+  o.width = width;
+  o.height = width;
+  const ImageStack stack = sim::simulate_stack(rig, o);
+  io::write_stack(dir, stack, {{"simulation", sim::describe(rig, o)}});
+}
+
+// The default dome with uneven LEDs: relative intensities from 0.7 to 1.3.
+Rig uneven_rig() {
+  Rig rig = load_rig(default_rig_path());
+  for (std::size_t i = 0; i < rig.leds.size(); ++i)
+    rig.leds[i].relative_intensity = 0.7 + 0.6 * ((i * 7) % 11) / 10.0;
+  return rig;
+}
+
+double true_relative(const Rig& rig, std::size_t i) {
+  double sum = 0;
+  for (const auto& led : rig.leds) sum += led.relative_intensity;
+  return rig.leds[i].relative_intensity / (sum / static_cast<double>(rig.leds.size()));
+}
+
+TEST(CalibrationBadInput, MissingHighlightAndOverexposedFramesAreNamed) {
+  const Rig rig = load_rig(default_rig_path());
+  const fs::path dir = testing::scratch_dir() / "chrome";
+  write_sim_stack(rig, "chrome-probe", dir, 128);
+  // 005.png: the LED did not fire (the median image is what the sphere shows without it).
+  cv::Mat dark = io::read_image(dir / "004.png");
+  dark.setTo(cv::Scalar::all(0));
+  io::write_png(dir / "005.png", dark);
+  // 007.png: overexposed.
+  io::write_png(dir / "007.png", cv::Mat(dark.size(), dark.type(), cv::Scalar::all(65535)));
+  LightCalibrationOptions o;
+  o.inputs = {dir};
+  const std::string message = error_of([&] { calibrate_lights(o); });
+  EXPECT_NE(message.find("no usable highlight for 2 of 96 lights (005.png, 007.png)"), std::string::npos)
+      << message;
+  EXPECT_NE(message.find("005.png: sphere 0: missing"), std::string::npos) << message;
+  EXPECT_NE(message.find("007.png: sphere 0: overexposed"), std::string::npos) << message;
+  o.allow_missing = true;
+  const auto run = calibrate_lights(o);
+  EXPECT_FALSE(run.calibration.lights[4].measured);
+  EXPECT_FALSE(run.calibration.lights[6].measured);
+  EXPECT_TRUE(run.calibration.lights[5].measured);
+  EXPECT_EQ(run.calibration.problems.size(), 2u);
+}
+
+TEST(CalibrationBadInput, NoSphereIsAClearError) {
+  const Rig rig = load_rig(default_rig_path());
+  const fs::path dir = testing::scratch_dir() / "empty";
+  write_sim_stack(rig, "chrome-sphere", dir, 64);  // a mirror that shows nothing but highlights
+  fs::remove(dir / "mask.png");
+  for (int i = 1; i <= 96; ++i)
+    io::write_png(dir / fmt::format("{:03}.png", i), cv::Mat(64, 64, CV_16UC1, cv::Scalar::all(0)));
+  LightCalibrationOptions o;
+  o.inputs = {dir};
+  const std::string message = error_of([&] { calibrate_lights(o); });
+  EXPECT_NE(message.find("median of its 96 images"), std::string::npos) << message;
+  EXPECT_NE(message.find("black"), std::string::npos) << message;
+  o.inputs = {testing::scratch_dir() / "nowhere"};
+  EXPECT_NE(error_of([&] { calibrate_lights(o); }).find("nowhere: no such stack folder"), std::string::npos);
+}
+
+TEST(CalibrationIntensity, MatteSphereAndFlatTargetRecoverRelativeIntensities) {
+  const Rig rig = uneven_rig();
+  const fs::path dir = testing::scratch_dir();
+  write_sim_stack(rig, "chrome-probe", dir / "chrome", 256);
+  write_sim_stack(rig, "matte-sphere", dir / "matte", 256);
+  write_sim_stack(rig, "white-target", dir / "target", 256);
+  LightCalibrationOptions o;
+  o.inputs = {dir / "chrome"};
+  o.rig = default_rig_path();
+  o.intensity_input = dir / "matte";
+  o.intensity_target = IntensityTarget::kMatteSphere;
+  const auto matte = calibrate_lights(o);
+  o.intensity_input = dir / "target";
+  o.intensity_target = IntensityTarget::kFlatTarget;
+  const auto flat = calibrate_lights(o);
+  double worst_matte = 0, worst_flat = 0;
+  for (std::size_t i = 0; i < rig.leds.size(); ++i) {
+    const double truth = true_relative(rig, i);
+    worst_matte = std::max(worst_matte, std::abs(matte.calibration.lights[i].intensity / truth - 1));
+    worst_flat = std::max(worst_flat, std::abs(flat.calibration.lights[i].intensity / truth - 1));
+  }
+  RecordProperty("matte_max_relative_error", fmt::format("{:.4f}", worst_matte));
+  RecordProperty("flat_max_relative_error", fmt::format("{:.4f}", worst_flat));
+  EXPECT_LT(worst_matte, 0.01);
+  EXPECT_LT(worst_flat, 0.01);
+  // The simulated target is uniform: its flat field is 1 within noise.
+  ASSERT_FALSE(flat.flat_field.empty());
+  cv::Scalar mean, spread;
+  cv::meanStdDev(flat.flat_field, mean, spread, flat.flat_field > 0);
+  EXPECT_NEAR(mean[0], 1.0, 1e-3);
+  EXPECT_LT(spread[0], 0.01);
+}
+
+// A Lambertian object about a fifth of the dome radius under near LEDs:
+// solving with the calibrated LED positions beats the distant approximation.
+TEST(CalibrationNearLights, NearLightLambertianLowersTheNormalError) {
+  const Rig rig = load_rig(default_rig_path());
+  const fs::path dir = testing::scratch_dir();
+  write_sim_stack(rig, "chrome-probe", dir / "chrome", 256);
+  write_sim_stack(rig, "matte-sphere", dir / "object", 256);
+  LightCalibrationOptions o;
+  o.inputs = {dir / "chrome"};
+  o.rig = default_rig_path();
+  const auto run = calibrate_lights(o);
+  write_calibration_outputs(dir / "cal", run, o.inputs);
+
+  L2Options l2;
+  l2.shadow_threshold = 0.02;
+  ImageStack stack = io::load_stack(dir / "object");
+  const StackCalibration applied =
+      apply_calibration_file(dir / "cal" / "calibration.json", dir / "object", stack);
+  EXPECT_EQ(applied.matched_by, "led_id");
+  Observations observations = make_observations(stack);
+  const double distant = angular_error(solve_lambertian(observations, l2).normals,
+                                       stack.ground_truth->normals, observations.mask)
+                             .stats.mean;
+  ASSERT_TRUE(set_near_lights(applied, observations));
+  const double near = angular_error(solve_lambertian(observations, l2).normals, stack.ground_truth->normals,
+                                    observations.mask)
+                          .stats.mean;
+  RecordProperty("distant_mean_deg", fmt::format("{:.3f}", distant));
+  RecordProperty("near_mean_deg", fmt::format("{:.3f}", near));
+  std::printf("near-light Lambertian: distant %.3f deg, near %.3f deg\n", distant, near);
+  EXPECT_LT(near, 0.8 * distant);
+}
+
+TEST(CalibrationApply, LpFileAndMismatchedStacks) {
+  const Rig rig = load_rig(default_rig_path());
+  const fs::path dir = testing::scratch_dir();
+  write_sim_stack(rig, "chrome-probe", dir / "chrome", 128);
+  LightCalibrationOptions o;
+  o.inputs = {dir / "chrome"};
+  const auto run = calibrate_lights(o);
+  write_calibration_outputs(dir / "cal", run, o.inputs);
+  for (const char* file : {"calibration.json", "light_directions.txt", "light_intensities.txt", "lights.lp",
+                           "lights_hemisphere.png", "highlights.png"})
+    EXPECT_TRUE(fs::exists(dir / "cal" / file)) << file;
+  ImageStack stack = io::load_stack(dir / "chrome");
+  const StackCalibration lp = apply_calibration_file(dir / "cal" / "lights.lp", dir / "chrome", stack);
+  EXPECT_EQ(lp.matched_by, "filename");
+  EXPECT_LT(angle_between_deg(stack.frames[10].light_direction, run.calibration.lights[10].direction), 1e-6);
+  Observations observations = make_observations(stack);
+  EXPECT_FALSE(set_near_lights(lp, observations));  // an .lp holds no positions
+  // A stack with fewer frames and no LED ids cannot be matched by order.
+  stack.frames.resize(10);
+  for (auto& f : stack.frames) f.led_id = -1;
+  const std::string message =
+      error_of([&] { apply_calibration_file(dir / "cal" / "calibration.json", dir / "chrome", stack); });
+  EXPECT_NE(message.find("96 lights, but the stack has 10 frames"), std::string::npos) << message;
+}
+
+}  // namespace
+}  // namespace lightstage::calibration

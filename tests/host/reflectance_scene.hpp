@@ -1,0 +1,126 @@
+#pragma once
+// Synthetic data for the general-reflectance tests: a grid of normals over
+// the visible hemisphere seen under random distant lights (or near LEDs of
+// the sim dome), shaded exactly by a sim BRDF. Small on purpose (the tests
+// also run under sanitizers); the big sweeps live in `lightstage bench materials`.
+
+#include "lightstage/common/geometry.hpp"
+#include "lightstage/common/rig.hpp"
+#include "lightstage/host/near_lights.hpp"
+#include "lightstage/host/radiometry.hpp"
+#include "lightstage/sim/material.hpp"
+
+#include <opencv2/core.hpp>
+
+#include <cmath>
+#include <random>
+#include <string>
+
+namespace lightstage::testing {
+
+struct ReflectanceScene {
+  Observations observations;
+  cv::Mat truth;  // CV_32FC3
+};
+
+inline Eigen::MatrixX3d hemisphere_lights(int count, unsigned seed, double min_z = 0.1) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> gauss;
+  Eigen::MatrixX3d lights(count, 3);
+  for (int j = 0; j < count;) {
+    Vec3 v(gauss(rng), gauss(rng), gauss(rng));
+    if (v.norm() < 1e-9) continue;
+    v.normalize();
+    v.z() = std::abs(v.z());
+    if (v.z() < min_z) continue;
+    lights.row(j++) = v.transpose();
+  }
+  return lights;
+}
+
+// width × height normals: azimuth over columns, elevation 15°..88° over rows.
+inline Vec3 grid_normal(int x, int y, int width, int height) {
+  const double azimuth = 2 * kPi * (x + 0.5) / width;
+  const double elevation = rad_from_deg(15 + 73.0 * (y + 0.5) / height);
+  return direction_from_elevation_azimuth(elevation, azimuth);
+}
+
+// Distant lights; `noise` = λ of y + λ y X with 16-bit quantisation (< 0: exact).
+inline ReflectanceScene make_reflectance_scene(const std::string& material_preset,
+                                               const Eigen::MatrixX3d& lights, int width = 12, int height = 8,
+                                               double noise = -1, unsigned seed = 3) {
+  const sim::Material material = sim::parse_material(material_preset);
+  ReflectanceScene scene;
+  Observations& obs = scene.observations;
+  obs.size = cv::Size(width, height);
+  obs.mask = cv::Mat(obs.size, CV_8UC1, cv::Scalar::all(255));
+  obs.lights = lights;
+  obs.intensities.resize(width * height, lights.rows());
+  obs.saturated = FlagMatrix::Constant(width * height, lights.rows(), false);
+  scene.truth = cv::Mat(obs.size, CV_32FC3);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> gauss;
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const int p = static_cast<int>(obs.pixels.size());
+      obs.pixels.emplace_back(x, y);
+      const Vec3 n = grid_normal(x, y, width, height);
+      scene.truth.at<cv::Vec3f>(y, x) =
+          cv::Vec3f(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
+      for (Eigen::Index j = 0; j < lights.rows(); ++j) {
+        double value = 0.5 * material.shading(0, 0, n, lights.row(j).transpose(), Vec3::UnitZ());
+        if (noise >= 0)
+          value = std::round(std::clamp(value + noise * value * gauss(rng), 0.0, 1.0) * 65535) / 65535;
+        obs.intensities(p, j) = static_cast<float>(value);
+      }
+    }
+  }
+  return scene;
+}
+
+// The sim dome's LEDs as near point lights over a small patch of surface
+// points on the plane z = 0 (± 20 mm around the centre): every pixel sees
+// its own light directions and 1/d² falloff.
+inline ReflectanceScene make_near_scene(const std::string& material_preset, const Rig& rig, int width = 8,
+                                        int height = 6) {
+  const sim::Material material = sim::parse_material(material_preset);
+  ReflectanceScene scene;
+  Observations& obs = scene.observations;
+  const auto images = static_cast<Eigen::Index>(rig.leds.size());
+  NearLights near;
+  near.led_positions_mm.resize(images, 3);
+  for (Eigen::Index j = 0; j < images; ++j)
+    near.led_positions_mm.row(j) = rig.leds[static_cast<std::size_t>(j)].position_mm.transpose();
+  near.object_centre_mm = rig.object_position_mm;
+  obs.size = cv::Size(width, height);
+  obs.mask = cv::Mat(obs.size, CV_8UC1, cv::Scalar::all(255));
+  obs.lights.resize(images, 3);
+  for (Eigen::Index j = 0; j < images; ++j) obs.lights.row(j) = near.led_positions_mm.row(j).normalized();
+  const int pixels = width * height;
+  near.points_mm.resize(pixels, 3);
+  obs.intensities.resize(pixels, images);
+  obs.saturated = FlagMatrix::Constant(pixels, images, false);
+  scene.truth = cv::Mat(obs.size, CV_32FC3);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const int p = static_cast<int>(obs.pixels.size());
+      obs.pixels.emplace_back(x, y);
+      const Vec3 point(-20 + 40.0 * x / std::max(1, width - 1), -20 + 40.0 * y / std::max(1, height - 1), 0);
+      near.points_mm.row(p) = point.transpose();
+      const Vec3 n = grid_normal(x, y, width, height);
+      scene.truth.at<cv::Vec3f>(y, x) =
+          cv::Vec3f(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
+      for (Eigen::Index j = 0; j < images; ++j) {
+        const Vec3 to_led = near.led_positions_mm.row(j).transpose() - point;
+        const double d0 = (near.led_positions_mm.row(j).transpose() - near.object_centre_mm).norm();
+        const double gain = d0 * d0 / to_led.squaredNorm();
+        obs.intensities(p, j) =
+            static_cast<float>(0.5 * gain * material.shading(0, 0, n, to_led.normalized(), Vec3::UnitZ()));
+      }
+    }
+  }
+  obs.near = near;
+  return scene;
+}
+
+}  // namespace lightstage::testing

@@ -1,0 +1,333 @@
+// The report writer: per-light statistics, the viewer's shading and embedded
+// data, and the page built from a small synthetic solve.
+#include "lightstage/host/report/report.hpp"
+#include "lightstage/host/io/normal_map.hpp"
+#include "lightstage/host/io/pfm.hpp"
+#include "lightstage/host/io/solve_output.hpp"
+#include "lightstage/host/io/stack_io.hpp"
+#include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/report/light_statistics.hpp"
+#include "lightstage/host/report/viewer_data.hpp"
+#include "lightstage/host/solvers/lambertian.hpp"
+#include "lightstage/testing/errors.hpp"
+#include "lightstage/testing/paths.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <zlib.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace lightstage {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kSize = 32;
+
+// A Lambertian sphere of albedo 0.6 under 8 distant lights, 16-bit grey, with
+// ground truth; the lights' directions are exact, one frame is dark (an LED
+// that did not fire) and one saturates.
+ImageStack sphere_stack() {
+  ImageStack stack;
+  stack.mask = cv::Mat(kSize, kSize, CV_8UC1, cv::Scalar(0));
+  GroundTruth truth;
+  truth.normals = cv::Mat(kSize, kSize, CV_32FC3, cv::Scalar::all(0));
+  const double r = kSize / 2.0 - 1.5;
+  for (int y = 0; y < kSize; ++y) {
+    for (int x = 0; x < kSize; ++x) {
+      const double nx = (x + 0.5 - kSize / 2.0) / r, ny = -(y + 0.5 - kSize / 2.0) / r;
+      if (nx * nx + ny * ny > 0.95) continue;
+      stack.mask.at<std::uint8_t>(y, x) = 255;
+      truth.normals.at<cv::Vec3f>(y, x) = cv::Vec3f(static_cast<float>(nx), static_cast<float>(ny),
+                                                    static_cast<float>(std::sqrt(1 - nx * nx - ny * ny)));
+    }
+  }
+  stack.ground_truth = truth;
+  for (int i = 0; i < 8; ++i) {
+    Frame frame;
+    frame.filename = fmt::format("{:03}.png", i + 1);
+    const double a = 0.785 * i;
+    frame.light_direction = Vec3(0.5 * std::cos(a), 0.5 * std::sin(a), 0.85).normalized();
+    frame.led_id = 20 + i;
+    frame.exposure_us = 1000 * (i + 1);
+    frame.image = cv::Mat(kSize, kSize, CV_16UC1, cv::Scalar(0));
+    const double gain = i == 5 ? 3.0 : 1.0;  // frame 6 saturates
+    for (int y = 0; y < kSize; ++y) {
+      for (int x = 0; x < kSize; ++x) {
+        const auto n = truth.normals.at<cv::Vec3f>(y, x);
+        const double shading =
+            0.6 * std::max(0.0, n[0] * frame.light_direction.x() + n[1] * frame.light_direction.y() +
+                                    n[2] * frame.light_direction.z());
+        frame.image.at<std::uint16_t>(y, x) =
+            cv::saturate_cast<std::uint16_t>(std::lround(gain * shading * 65535));
+      }
+    }
+    if (i == 2) frame.image.setTo(0);  // frame 3 is dark
+    stack.frames.push_back(frame);
+  }
+  return stack;
+}
+
+// Writes the stack and a Lambertian solve of it under `dir`; returns the result folder.
+fs::path solved_result(const fs::path& dir) {
+  const ImageStack stack = sphere_stack();
+  io::write_stack(dir / "stack", stack);
+  L2Options options;
+  options.shadow_threshold = 0.01;
+  const SolveResult result = solve_lambertian(make_observations(stack), options);
+  io::write_solve_outputs(dir / "result", result, dir / "stack");
+  return dir / "result";
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// The text between `open` and the next `close` after it.
+std::string between(const std::string& text, const std::string& open, const std::string& close) {
+  const auto start = text.find(open);
+  if (start == std::string::npos) return {};
+  const auto from = start + open.size();
+  return text.substr(from, text.find(close, from) - from);
+}
+
+std::vector<std::uint8_t> decode_base64(const std::string& text) {
+  std::vector<std::uint8_t> out;
+  std::uint32_t buffer = 0;
+  int bits = 0;
+  for (const char c : text) {
+    int v = -1;
+    if (c >= 'A' && c <= 'Z')
+      v = c - 'A';
+    else if (c >= 'a' && c <= 'z')
+      v = c - 'a' + 26;
+    else if (c >= '0' && c <= '9')
+      v = c - '0' + 52;
+    else if (c == '+')
+      v = 62;
+    else if (c == '/')
+      v = 63;
+    else
+      continue;
+    buffer = (buffer << 6) | static_cast<std::uint32_t>(v);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out.push_back(static_cast<std::uint8_t>((buffer >> bits) & 255));
+    }
+  }
+  return out;
+}
+
+std::vector<std::uint8_t> inflate_zlib(const std::vector<std::uint8_t>& bytes, std::size_t size) {
+  std::vector<std::uint8_t> out(size);
+  uLongf length = static_cast<uLongf>(size);
+  EXPECT_EQ(uncompress(out.data(), &length, bytes.data(), static_cast<uLong>(bytes.size())), Z_OK);
+  EXPECT_EQ(length, size);
+  return out;
+}
+
+TEST(LightStatistics, FindsTheDarkAndTheSaturatedFrame) {
+  const ImageStack stack = sphere_stack();
+  const auto stats = report::light_statistics(stack, 0.01);
+  ASSERT_EQ(stats.size(), 8u);
+  EXPECT_EQ(stats[2].shadow_share, 1.0);  // dark: every pixel at or below the threshold
+  EXPECT_EQ(stats[2].mean_value, 0.0);
+  EXPECT_GT(stats[5].saturated_share, 0.3);
+  EXPECT_EQ(stats[0].saturated_share, 0.0);
+  EXPECT_LT(stats[0].shadow_share, 0.2);
+  EXPECT_NEAR(stats[0].mean_value, stats[1].mean_value, 0.05);
+  EXPECT_EQ(stats[3].file, "004.png");
+  EXPECT_EQ(stats[3].led_id, 23);
+  EXPECT_EQ(stats[3].exposure_us, 4000);
+  EXPECT_NE(testing::error_of([&] { report::light_statistics(stack, -1); }).find("shadow_threshold"),
+            std::string::npos);
+}
+
+TEST(ViewerData, LambertianShadingIsAlbedoTimesClampedCosine) {
+  report::SurfaceModel model;
+  model.normals = cv::Mat(1, 3, CV_32FC3, cv::Scalar::all(0));
+  model.normals.at<cv::Vec3f>(0, 0) = cv::Vec3f(0, 0, 1);
+  model.normals.at<cv::Vec3f>(0, 1) = cv::Vec3f(1, 0, 0);
+  model.valid = cv::Mat(1, 3, CV_8UC1, cv::Scalar(255));
+  model.valid.at<std::uint8_t>(0, 2) = 0;
+  model.albedo = cv::Mat(1, 3, CV_32FC1, cv::Scalar(0.5));
+  const Vec3 light(0, 3, 4);  // normalised inside: (0, 0.6, 0.8)
+  EXPECT_NEAR(report::shade(model, 0, 0, light), 0.5 * 0.8, 1e-6);
+  EXPECT_EQ(report::shade(model, 1, 0, light), 0.0);             // n·l = 0
+  EXPECT_EQ(report::shade(model, 1, 0, Vec3(-1, 0, 0.1)), 0.0);  // facing away: clamped
+  EXPECT_EQ(report::shade(model, 2, 0, light), 0.0);             // no normal
+  const cv::Mat image = report::relight(model, light);
+  EXPECT_NEAR(image.at<float>(0, 0), 0.4, 1e-6);
+}
+
+TEST(ViewerData, BiPolynomialShadingUsesTheFittedModel) {
+  report::SurfaceModel model;
+  model.kind = report::ShadingKind::kBiPolynomial;
+  model.order = 1;
+  model.normals = cv::Mat(1, 1, CV_32FC3, cv::Scalar(0, 0, 1));
+  model.valid = cv::Mat(1, 1, CV_8UC1, cv::Scalar(255));
+  model.albedo = cv::Mat(1, 1, CV_32FC1, cv::Scalar(9));                          // not used by the model
+  model.coefficients = cv::Mat(1, 1, CV_32FC4, cv::Scalar(0.3, 0.2, 0.1, 0.05));  // C00 C01 C10 C11
+  const Vec3 l = Vec3(0.6, 0, 0.8);
+  const Vec3 h = (l + Vec3::UnitZ()).normalized();
+  const double x = h.z(), y = l.dot(h);
+  const double rho = 0.3 + 0.2 * y + 0.1 * x + 0.05 * x * y;
+  EXPECT_NEAR(report::shade(model, 0, 0, l), rho * 0.8, 1e-6);
+}
+
+TEST(ViewerData, PayloadCarriesTheResultFiles) {
+  const auto dir = testing::scratch_dir();
+  const auto result = solved_result(dir);
+  std::vector<std::string> notes;
+  const nlohmann::json summary = nlohmann::json::parse(read_text(result / "summary.json"));
+  const auto model = report::load_surface_model(result, summary, 1 << 20, notes);
+  EXPECT_EQ(model.stride, 1);
+  EXPECT_EQ(model.kind, report::ShadingKind::kLambertian);
+  EXPECT_DOUBLE_EQ(model.display_scale, summary["albedo_png_scale"].get<double>());
+  const auto payload = report::encode_viewer_payload(model, {Vec3::UnitZ()}, Vec3(0, 0, 1));
+  EXPECT_EQ(payload.meta["width"], kSize);
+  EXPECT_EQ(payload.meta["model"]["kind"], "lambertian");
+  std::size_t size = 0;
+  for (const auto& plane : payload.meta["planes"]) size += plane["bytes"].get<std::size_t>();
+  const auto bytes = inflate_zlib(decode_base64(payload.data_base64), size);
+  // Albedo: the float map, bit for bit.
+  const cv::Mat albedo = io::read_pfm(result / "albedo.pfm");
+  const auto& albedo_plane = payload.meta["planes"][0];
+  EXPECT_EQ(albedo_plane["name"], "albedo");
+  EXPECT_EQ(std::memcmp(bytes.data() + albedo_plane["offset"].get<std::size_t>(), albedo.data,
+                        kSize * kSize * sizeof(float)),
+            0);
+  // Normals: the normal.png encoding (x y z order), decoding to the file's normals.
+  const auto& normal_plane = payload.meta["planes"][1];
+  EXPECT_EQ(normal_plane["name"], "normals");
+  const auto decoded = io::read_normal_map(result / "normal.png");
+  const auto* encoded =
+      reinterpret_cast<const std::uint16_t*>(bytes.data() + normal_plane["offset"].get<std::size_t>());
+  int checked = 0;
+  for (int y = 0; y < kSize; ++y) {
+    for (int x = 0; x < kSize; ++x) {
+      const auto* e = encoded + 3 * (y * kSize + x);
+      if (decoded.valid.at<std::uint8_t>(y, x) == 0) {
+        EXPECT_TRUE(e[0] == 0 && e[1] == 0 && e[2] == 0);
+        continue;
+      }
+      const auto n = decoded.normals.at<cv::Vec3f>(y, x);
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(e[c] / 65535.0 * 2 - 1, n[c], 2.0 / 65535);
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 400);
+}
+
+TEST(Report, HasEverySectionForASolvedSimulatedStack) {
+  const auto dir = testing::scratch_dir();
+  const auto result = solved_result(dir);
+  const auto summary = report::write_report(result);
+  EXPECT_EQ(summary.file, result / "report.html");
+  const std::vector<std::string> expected = {"viewer",   "surface", "lights", "light-statistics",
+                                             "residual", "error",   "notes"};
+  EXPECT_EQ(summary.sections, expected);
+  const std::string html = read_text(summary.file);
+  EXPECT_EQ(html.size(), summary.bytes);
+  // Self-contained: images are data URIs, nothing is fetched.
+  EXPECT_EQ(html.find("src=\"http"), std::string::npos);
+  EXPECT_EQ(html.find("<link"), std::string::npos);
+  EXPECT_NE(html.find("src=\"data:image/png;base64,"), std::string::npos);
+  EXPECT_NE(html.find("window.lightstageViewer"), std::string::npos);
+  EXPECT_EQ(html.find("\nimport "), std::string::npos);  // modules joined at build time
+  // The per-light table flags the dark frame and counts the saturated one.
+  EXPECT_NE(html.find("1 light(s) look dark"), std::string::npos);
+  EXPECT_NE(html.find("<td class=\"text\">003.png</td><td>22</td>"), std::string::npos);
+  // The viewer's metadata parses and matches the result.
+  const auto meta = nlohmann::json::parse(
+      between(html, "<script type=\"application/json\" id=\"lightstage-viewer-meta\">", "</script>"));
+  EXPECT_EQ(meta["width"], kSize);
+  EXPECT_EQ(meta["lights"].size(), 8u);
+  // The error numbers are the solve's.
+  EXPECT_NE(html.find("id=\"error-numbers\""), std::string::npos);
+  // No depth.pfm: a note says so.
+  bool depth_note = false;
+  for (const auto& note : summary.notes) depth_note |= note.find("depth.pfm") != std::string::npos;
+  EXPECT_TRUE(depth_note);
+}
+
+TEST(Report, DrawsDepthAndCalibrationWhenPresentAndOmitsWhatIsMissing) {
+  const auto dir = testing::scratch_dir();
+  const auto result = solved_result(dir);
+  cv::Mat depth(kSize, kSize, CV_32FC1, cv::Scalar(0));
+  for (int y = 0; y < kSize; ++y)
+    for (int x = 0; x < kSize; ++x) depth.at<float>(y, x) = static_cast<float>(std::hypot(x - 16, y - 16));
+  io::write_pfm(result / "depth.pfm", depth);
+  fs::remove_all(dir / "stack");  // the input stack is gone: no lights, no statistics, no ground truth
+  report::ReportSummary summary = report::write_report(result, dir / "out" / "page.html");
+  EXPECT_TRUE(fs::exists(dir / "out" / "page.html"));
+  const std::vector<std::string> expected = {"viewer", "surface", "depth", "residual", "notes"};
+  EXPECT_EQ(summary.sections, expected);
+  std::string notes;
+  for (const auto& note : summary.notes) notes += note + "\n";
+  EXPECT_NE(notes.find("was not found"), std::string::npos) << notes;
+  EXPECT_NE(notes.find("No ground truth"), std::string::npos) << notes;
+
+  // Ground truth given by flag: the error section comes back.
+  io::write_normal_map(dir / "gt.png", sphere_stack().ground_truth->normals);
+  report::ReportOptions options;
+  options.ground_truth = dir / "gt.png";
+  summary = report::write_report(result, {}, options);
+  EXPECT_NE(std::find(summary.sections.begin(), summary.sections.end(), "error"), summary.sections.end());
+
+  // Depth from a `lightstage integrate` folder: its camera sets the relief's pixel size.
+  fs::create_directories(dir / "surface");
+  fs::rename(result / "depth.pfm", dir / "surface" / "depth.pfm");
+  std::ofstream(dir / "surface" / "surface.json")
+      << R"({"camera": {"model": "orthographic", "pixel_size": 0.5}})";
+  options = {};
+  options.depth = dir / "surface";
+  const std::string html = report::render_report(result, options, &summary);
+  EXPECT_NE(std::find(summary.sections.begin(), summary.sections.end(), "depth"), summary.sections.end());
+  EXPECT_NE(html.find("(0.5 mm per pixel)"), std::string::npos);
+  options.depth = dir / "nowhere";
+  EXPECT_NE(testing::error_of([&] { report::render_report(result, options); }).find("--depth"),
+            std::string::npos);
+}
+
+TEST(Report, ErrorsNameTheFile) {
+  const auto dir = testing::scratch_dir();
+  EXPECT_NE(testing::error_of([&] { report::render_report(dir / "missing"); }).find("missing: not a folder"),
+            std::string::npos);
+  EXPECT_NE(testing::error_of([&] { report::render_report(dir); }).find("normal.png"), std::string::npos);
+  const auto result = solved_result(dir);
+  report::ReportOptions options;
+  options.ground_truth = dir / "nowhere.png";
+  EXPECT_NE(testing::error_of([&] { report::render_report(result, options); }).find("--gt"),
+            std::string::npos);
+  options = {};
+  options.viewer_max_pixels = 0;
+  EXPECT_NE(testing::error_of([&] { report::render_report(result, options); }).find("viewer_max_pixels"),
+            std::string::npos);
+}
+
+TEST(Report, LargeResultsAreSubsampledForTheViewer) {
+  const auto dir = testing::scratch_dir();
+  const auto result = solved_result(dir);
+  report::ReportOptions options;
+  options.viewer_max_pixels = 300;  // 32×32 = 1024 pixels → stride 2
+  report::ReportSummary summary;
+  const std::string html = report::render_report(result, options, &summary);
+  const auto meta = nlohmann::json::parse(
+      between(html, "<script type=\"application/json\" id=\"lightstage-viewer-meta\">", "</script>"));
+  EXPECT_EQ(meta["stride"], 2);
+  EXPECT_EQ(meta["width"], 16);
+}
+
+}  // namespace
+}  // namespace lightstage
