@@ -25,7 +25,8 @@ const Scene& scene(int n) {
   s.normals = cv::Mat::zeros(n, n, CV_32FC3);
   s.mask = cv::Mat::zeros(n, n, CV_8UC1);
   s.depth = cv::Mat::zeros(n, n, CV_32FC1);
-  const double bumps[4][4] = {{0.3, 0.4, 0.12, 0.15}, {0.65, 0.55, 0.1, 0.1}, {0.5, 0.25, 0.08, 0.06}, {0.5, 0.5, 0.3, 0.2}};
+  const double bumps[4][4] = {
+      {0.3, 0.4, 0.12, 0.15}, {0.65, 0.55, 0.1, 0.1}, {0.5, 0.25, 0.08, 0.06}, {0.5, 0.5, 0.3, 0.2}};
   for (int r = 0; r < n; ++r) {
     for (int c = 0; c < n; ++c) {
       const double x = static_cast<double>(c) / n, y = static_cast<double>(r) / n;
@@ -40,8 +41,8 @@ const Scene& scene(int n) {
       }
       // Rows grow downward: ∂h/∂y_up = −hy.
       const Vec3 normal = Vec3(-hx, hy, 1).normalized();
-      s.normals.at<cv::Vec3f>(r, c) = cv::Vec3f(static_cast<float>(normal.x()), static_cast<float>(normal.y()),
-                                                static_cast<float>(normal.z()));
+      s.normals.at<cv::Vec3f>(r, c) = cv::Vec3f(
+          static_cast<float>(normal.x()), static_cast<float>(normal.y()), static_cast<float>(normal.z()));
       s.mask.at<std::uint8_t>(r, c) = 255;
       s.depth.at<float>(r, c) = static_cast<float>(h);
     }
@@ -60,7 +61,8 @@ void BM_PoissonDiscontinuityPreserving(benchmark::State& state) {
   const Scene& s = scene(static_cast<int>(state.range(0)));
   IntegrationOptions options;
   options.preserve_discontinuities = true;
-  for (auto _ : state) benchmark::DoNotOptimize(integrate_normals(s.normals, s.mask, s.camera, options).depth.data);
+  for (auto _ : state)
+    benchmark::DoNotOptimize(integrate_normals(s.normals, s.mask, s.camera, options).depth.data);
 }
 BENCHMARK(BM_PoissonDiscontinuityPreserving)->Arg(1024)->Unit(benchmark::kMillisecond);
 
@@ -69,7 +71,8 @@ void BM_FrankotChellappa(benchmark::State& state) {
   IntegrationOptions options;
   options.method = IntegrationMethod::kFrankotChellappa;
   const cv::Mat full(s.mask.size(), CV_8UC1, cv::Scalar(255));
-  for (auto _ : state) benchmark::DoNotOptimize(integrate_normals(s.normals, full, s.camera, options).depth.data);
+  for (auto _ : state)
+    benchmark::DoNotOptimize(integrate_normals(s.normals, full, s.camera, options).depth.data);
 }
 BENCHMARK(BM_FrankotChellappa)->Arg(1024)->Unit(benchmark::kMillisecond);
 

@@ -1,6 +1,7 @@
 // `lightstage integrate` and `solve --method shape-prior` end to end through
 // the CLI, measured against the simulator's ground truth.
 #include "lightstage/common/rig.hpp"
+#include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/io/stack_io.hpp"
 #include "lightstage/host/surface/mesh.hpp"
@@ -19,11 +20,6 @@ namespace lightstage {
 namespace {
 
 using testing::run_lightstage;
-
-nlohmann::json read_json(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  return nlohmann::json::parse(in);
-}
 
 constexpr int kSize = 96;
 const double kPixelMm = 102.4 / kSize;  // the default dome camera's field at kSize pixels
@@ -45,14 +41,15 @@ double relative_depth_error(const cv::Mat& a, const cv::Mat& b, const cv::Mat& m
 
 TEST(Integrate, SolvedNormalsBecomeDepthAndMeshes) {
   const auto dir = testing::scratch_dir();
-  auto run = run_lightstage({"simulate", "--scene", "bumps", "--lights", "distant", "--noise", "none", "--width",
-                             std::to_string(kSize), "--height", std::to_string(kSize), "--out", (dir / "stack").string()});
+  auto run = run_lightstage({"simulate", "--scene", "bumps", "--lights", "distant", "--noise", "none",
+                             "--width", std::to_string(kSize), "--height", std::to_string(kSize), "--out",
+                             (dir / "stack").string()});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   run = run_lightstage({"solve", "--input", (dir / "stack").string(), "--out", (dir / "result").string()});
   ASSERT_EQ(run.exit_code, 0) << run.err;
-  run = run_lightstage({"integrate", "--input", (dir / "result").string(), "--mask", (dir / "stack/mask.png").string(),
-                        "--pixel-mm", fmt::format("{}", kPixelMm), "--mesh", "both", "--out",
-                        (dir / "surface").string(), "--json"});
+  run = run_lightstage({"integrate", "--input", (dir / "result").string(), "--mask",
+                        (dir / "stack/mask.png").string(), "--pixel-mm", fmt::format("{}", kPixelMm),
+                        "--mesh", "both", "--out", (dir / "surface").string(), "--json"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   for (const char* file : {"depth.pfm", "depth.png", "mesh.ply", "mesh.obj", "surface.json"})
     EXPECT_TRUE(std::filesystem::exists(dir / "surface" / file)) << file;
@@ -84,20 +81,22 @@ TEST(Integrate, ShapePriorSolveUnderNaturalLighting) {
   scene.width = scene.height = kSize;
   sim::NaturalCaptureOptions capture;  // random responses per image
   const sim::NaturalCapture natural = sim::simulate_natural(rig, scene, capture);
-  io::write_stack(dir / "stack", natural.stack, natural.describe());
+  io::write_stack(dir / "stack", natural.stack, {{"natural_capture", natural.describe()}});
   const cv::Mat prior = sim::degrade_depth(natural.stack.ground_truth->depth, natural.stack.mask,
                                            sim::PriorDegradation::beta(4), 3);
   io::write_pfm(dir / "prior.pfm", prior);
-  auto run = run_lightstage({"solve", "--input", (dir / "stack").string(), "--method", "shape-prior", "--prior",
-                             (dir / "prior.pfm").string(), "--pixel-mm", fmt::format("{}", kPixelMm), "--prior-radius",
-                             fmt::format("{}", 6 * kPixelMm), "--out", (dir / "result").string(), "--json"});
+  auto run = run_lightstage({"solve", "--input", (dir / "stack").string(), "--method", "shape-prior",
+                             "--prior", (dir / "prior.pfm").string(), "--pixel-mm",
+                             fmt::format("{}", kPixelMm), "--prior-radius", fmt::format("{}", 6 * kPixelMm),
+                             "--out", (dir / "result").string(), "--json"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const auto summary = nlohmann::json::parse(run.out);
   EXPECT_EQ(summary["method"], "shape-prior");
   EXPECT_LT(summary["error_vs_ground_truth"]["mean_deg"].get<double>(), 6.0) << run.out;
   // And fused with the same prior into a surface.
-  run = run_lightstage({"integrate", "--input", (dir / "result").string(), "--prior", (dir / "prior.pfm").string(),
-                        "--pixel-mm", fmt::format("{}", kPixelMm), "--out", (dir / "surface").string()});
+  run = run_lightstage({"integrate", "--input", (dir / "result").string(), "--prior",
+                        (dir / "prior.pfm").string(), "--pixel-mm", fmt::format("{}", kPixelMm), "--out",
+                        (dir / "surface").string()});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_TRUE(std::filesystem::exists(dir / "surface/mesh.ply"));
 }
@@ -107,7 +106,8 @@ TEST(Integrate, BadInputNamesTheFlagOrFile) {
   auto run = run_lightstage({"integrate", "--out", (dir / "o").string()});
   EXPECT_NE(run.exit_code, 0);
   EXPECT_NE(run.err.find("--normals"), std::string::npos) << run.err;
-  run = run_lightstage({"integrate", "--normals", (dir / "missing.png").string(), "--out", (dir / "o").string()});
+  run = run_lightstage(
+      {"integrate", "--normals", (dir / "missing.png").string(), "--out", (dir / "o").string()});
   EXPECT_NE(run.exit_code, 0);
   EXPECT_NE(run.err.find("missing.png"), std::string::npos) << run.err;
   {
@@ -115,9 +115,9 @@ TEST(Integrate, BadInputNamesTheFlagOrFile) {
     k << "1 0 0\n0 1 0\n";
   }
   cv::Mat n(8, 8, CV_16UC3, cv::Scalar(32768, 32768, 65535));
-  cv::imwrite((dir / "n.png").string(), n);
-  run = run_lightstage({"integrate", "--normals", (dir / "n.png").string(), "--intrinsics", (dir / "K.txt").string(),
-                        "--out", (dir / "o").string()});
+  io::write_png16(dir / "n.png", n);
+  run = run_lightstage({"integrate", "--normals", (dir / "n.png").string(), "--intrinsics",
+                        (dir / "K.txt").string(), "--out", (dir / "o").string()});
   EXPECT_NE(run.exit_code, 0);
   EXPECT_NE(run.err.find("K.txt: intrinsics: expected nine numbers"), std::string::npos) << run.err;
   run = run_lightstage({"solve", "--input", (dir / "nowhere").string(), "--method", "shape-prior", "--out",

@@ -16,8 +16,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size < 1) return 0;
   static const char* const kExtensions[] = {".png", ".pfm", ".ply"};
   const char* ext = kExtensions[data[0] % 3];
-  const std::filesystem::path path = std::filesystem::temp_directory_path() /
-                                     ("lightstage-fuzz-depth-" + std::to_string(getpid()) + ext);
+  const std::filesystem::path path =
+      std::filesystem::temp_directory_path() / ("lightstage-fuzz-depth-" + std::to_string(getpid()) + ext);
   {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(data + 1), static_cast<std::streamsize>(size - 1));

@@ -9,8 +9,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   try {
-    const auto K = lightstage::surface::parse_intrinsics(std::string(reinterpret_cast<const char*>(data), size),
-                                                         "fuzz-K.txt");
+    const auto K = lightstage::surface::parse_intrinsics(
+        std::string(reinterpret_cast<const char*>(data), size), "fuzz-K.txt");
     if (!(K(0, 0) > 0) || !(K(1, 1) > 0) || K(2, 2) != 1) __builtin_trap();
   } catch (const lightstage::InputError&) {
   }

@@ -57,7 +57,8 @@ TEST(CalibrationFile, RoundTripsThroughJsonOnDisk) {
   EXPECT_EQ(back.problems.size(), 1u);
   EXPECT_EQ(directions_text(back).size(), directions_text(original).size());
   // Only measured lights go to the text files.
-  EXPECT_EQ(std::count(intensities_text(back).begin(), intensities_text(back).end(), '\n'), 2);
+  const std::string intensities = intensities_text(back);
+  EXPECT_EQ(std::count(intensities.begin(), intensities.end(), '\n'), 2);
 }
 
 TEST(CalibrationFile, ErrorsNameTheFieldAndValue) {

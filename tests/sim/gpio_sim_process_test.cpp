@@ -108,8 +108,13 @@ TEST_F(SimProcessTest, FaultsFromTheCommandLine) {
   sim->signal(SIGTERM);
   EXPECT_EQ(sim->wait(std::chrono::seconds(20)), std::optional<int>(0));
   const auto entries = read_json_lines(timeline);
-  ASSERT_EQ(entries.size(), 1u) << "LED3 is stuck dark; only the trigger changed";
+  // LED3 is stuck dark: only the trigger changed — asserted, then released
+  // (inactive) when the connection went.
+  ASSERT_EQ(entries.size(), 2u);
   EXPECT_EQ(entries[0]["line"], "TRIGGER");
+  EXPECT_EQ(entries[0]["value"], 1);
+  EXPECT_EQ(entries[1]["line"], "TRIGGER");
+  EXPECT_EQ(entries[1]["value"], 0);
   EXPECT_NE(sim->output().find("lose-strobe:1"), std::string::npos);
 }
 

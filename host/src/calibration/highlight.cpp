@@ -154,7 +154,7 @@ Highlight find_highlight(const cv::Mat& grey, const cv::Mat& background, const c
       inside.at<std::uint8_t>(r, c) = 255;
       const float d = grey.at<float>(row, col) - background.at<float>(row, col);
       diff.at<float>(r, c) = d;
-      samples.push_back(std::abs(d));
+      samples.push_back(d);
       ++sphere_pixels;
       if (saturated.at<std::uint8_t>(row, col) != 0) ++clipped;
     }
@@ -170,6 +170,18 @@ Highlight find_highlight(const cv::Mat& grey, const cv::Mat& background, const c
                     sphere_pixels, 100.0 * clipped / sphere_pixels, 100 * options.max_saturated_fraction);
     return result;
   }
+  // The surroundings a sphere mirrors are lit by this frame's LED, so they may be
+  // brighter or darker than in the median image: remove the frame's own offset.
+  std::vector<float> offsets;
+  for (int r = 0; r < roi.height; ++r)
+    for (int c = 0; c < roi.width; ++c)
+      if (inside.at<std::uint8_t>(r, c) != 0) offsets.push_back(diff.at<float>(r, c));
+  const auto centre = offsets.begin() + static_cast<std::ptrdiff_t>(offsets.size() / 2);
+  std::nth_element(offsets.begin(), centre, offsets.end());
+  const float offset = *centre;
+  diff -= offset;
+  diff.setTo(0, inside == 0);
+  for (auto& s : samples) s = std::abs(s - offset);
   const auto middle = samples.begin() + static_cast<std::ptrdiff_t>(samples.size() / 2);
   std::nth_element(samples.begin(), middle, samples.end());
   const double noise = 1.4826 * *middle;

@@ -84,7 +84,7 @@ ImageCircle fit_circle(const std::vector<Vec2>& points) {
   Vec2 mean = Vec2::Zero();
   for (const auto& p : points) mean += p;
   mean /= static_cast<double>(points.size());
-  Eigen::MatrixX3d a(static_cast<Eigen::Index>(points.size()), 3);
+  Eigen::MatrixXd a(static_cast<Eigen::Index>(points.size()), 3);  // dynamic: thin SVD needs it
   Eigen::VectorXd b(static_cast<Eigen::Index>(points.size()));
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Vec2 p = points[i] - mean;
@@ -92,7 +92,7 @@ ImageCircle fit_circle(const std::vector<Vec2>& points) {
     a.row(row) << p.x(), p.y(), 1.0;
     b(row) = -(p.squaredNorm());
   }
-  const Eigen::JacobiSVD<Eigen::MatrixX3d> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
   const Eigen::Vector3d sv = svd.singularValues();
   if (!(sv(2) > 1e-9 * sv(0))) fail("circle fit: the {} points are collinear", points.size());
   const Eigen::Vector3d def = svd.solve(b);

@@ -45,7 +45,9 @@ DepthMap render_depth(const Mesh& mesh, const CameraModel& camera) {
     const double area = (b.col - a.col) * (c.row - a.row) - (c.col - a.col) * (b.row - a.row);
     if (std::abs(area) < 1e-12) continue;
     // Clamp in floating point before converting: a far-off vertex must not overflow an int.
-    auto clamp_index = [](double v, int hi) { return static_cast<int>(std::clamp(v, -1.0, static_cast<double>(hi))); };
+    auto clamp_index = [](double v, int hi) {
+      return static_cast<int>(std::clamp(v, -1.0, static_cast<double>(hi)));
+    };
     const int c0 = std::max(0, clamp_index(std::ceil(std::min({a.col, b.col, c.col})), cols));
     const int c1 = std::min(cols - 1, clamp_index(std::floor(std::max({a.col, b.col, c.col})), cols));
     const int r0 = std::max(0, clamp_index(std::ceil(std::min({a.row, b.row, c.row})), rows));

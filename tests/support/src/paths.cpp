@@ -1,6 +1,7 @@
 #include "lightstage/testing/paths.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <string>
@@ -20,7 +21,12 @@ std::filesystem::path shared_data_dir() {
 
 std::filesystem::path scratch_dir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "scratch";
+  // Outside a test (a suite's SetUpTestSuite), one folder per suite and process:
+  // CTest runs a suite's cases as separate processes, in parallel.
+  const auto* suite = ::testing::UnitTest::GetInstance()->current_test_suite();
+  std::string name = info    ? std::string(info->test_suite_name()) + "." + info->name()
+                     : suite ? std::string(suite->name()) + ".setup-" + std::to_string(::getpid())
+                             : "scratch-" + std::to_string(::getpid());
   for (char& c : name) {
     if (c == '/') c = '_';
   }

@@ -22,7 +22,7 @@ namespace lightstage::calibration {
 
 struct HighlightOptions {
   // Peak above the median image (fraction of full scale) below which there is no highlight.
-  double min_peak = 0.02;
+  double min_peak = 0.005;
   // Pixels above this fraction of the peak (and above the noise) form the highlight's blob.
   double threshold_fraction = 0.05;
   // A separate blob with at least this fraction of the highlight's energy is a second reflection.
