@@ -286,7 +286,8 @@ Mesh parse_ply(const std::string& bytes, const std::string& source) {
   for (const Element& e : elements) {
     // Every item takes at least one byte (binary) or two characters (ASCII):
     // a count beyond that cannot be honest, and must not drive allocations.
-    if (!e.properties.empty() && e.count > body.remaining())
+    if (e.properties.empty()) continue;  // items without properties take no bytes: nothing to read
+    if (e.count > body.remaining())
       fail("{}: PLY element '{}' claims {} items but the file is too short", source, e.name.substr(0, 40),
            e.count);
     const bool is_vertex = &e == vertex_element;
