@@ -1,8 +1,8 @@
 #include "options.hpp"
 
 #include "lightstage/common/error.hpp"
-#include "methods.hpp"
 #include "lightstage/sim/scene_file.hpp"
+#include "methods.hpp"
 
 #include <fmt/format.h>
 
@@ -97,7 +97,8 @@ void SolveArgs::resolve() {
     a.monotonic.shadow_threshold = a.bipolynomial.shadow_threshold = *shadow_threshold;
   }
   if (t_low) l2.t_low = robust.t_low = bipolynomial.t_low = a.bipolynomial.t_low = *t_low;
-  if (min_observations) l2.min_observations = robust.min_observations = monotonic.min_observations = *min_observations;
+  if (min_observations)
+    l2.min_observations = robust.min_observations = monotonic.min_observations = *min_observations;
   if (max_iterations) bipolynomial.max_iterations = a.bipolynomial.max_iterations = *max_iterations;
   a.monotonic.gamma = monotonic.gamma;
   if (threads) l2.threads = robust.threads = monotonic.threads = bipolynomial.threads = a.threads = *threads;

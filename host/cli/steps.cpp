@@ -2,10 +2,10 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
+#include "lightstage/host/calibration/apply_calibration.hpp"
 #include "lightstage/host/io/solve_output.hpp"
 #include "lightstage/host/io/stack_io.hpp"
 #include "lightstage/host/report/report.hpp"
-#include "lightstage/host/calibration/apply_calibration.hpp"
 
 #include <fmt/format.h>
 
@@ -42,7 +42,8 @@ void write_result_report(const std::filesystem::path& result_dir, const std::fil
     report::ReportOptions options;
     options.stack = input;
     const auto written = report::write_report(result_dir, result_dir / "report.html", options);
-    logger("host")->info("report: {} ({:.1f} MB)", written.file.string(), static_cast<double>(written.bytes) / 1e6);
+    logger("host")->info("report: {} ({:.1f} MB)", written.file.string(),
+                         static_cast<double>(written.bytes) / 1e6);
   } catch (const Error& e) {
     logger("host")->warn("report not written: {}", e.what());
   }
@@ -52,8 +53,8 @@ SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOpt
                          const L2Options& options, const std::filesystem::path& out) {
   options.check();
   return solve_folder(
-      input, radiometry, [&options](const Observations& observations) { return solve_lambertian(observations, options); },
-      out);
+      input, radiometry,
+      [&options](const Observations& observations) { return solve_lambertian(observations, options); }, out);
 }
 
 SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOptions& radiometry,
@@ -62,7 +63,8 @@ SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOpt
   radiometry.check();
   ImageStack stack = io::load_stack(input);
   std::optional<calibration::StackCalibration> applied;
-  if (!calibration.file.empty()) applied = calibration::apply_calibration_file(calibration.file, input, stack);
+  if (!calibration.file.empty())
+    applied = calibration::apply_calibration_file(calibration.file, input, stack);
   Observations observations = make_observations(stack, radiometry);
   const bool near = applied && !calibration.distant && calibration::set_near_lights(*applied, observations);
   const SolveResult result = solver(observations);

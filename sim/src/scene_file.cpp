@@ -174,7 +174,8 @@ Scene parse_document(const Field& root, const std::string& source) {
     if (scene.highlight_blur_px > 20) root["highlight_blur_px"].error("must be at most 20 pixels");
   }
   if (root.has("cast_shadows")) scene.cast_shadows = root["cast_shadows"].boolean();
-  if (root.has("environment_radiance")) scene.environment_radiance = root["environment_radiance"].non_negative();
+  if (root.has("environment_radiance"))
+    scene.environment_radiance = root["environment_radiance"].non_negative();
   return scene;
 }
 

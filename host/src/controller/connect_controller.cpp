@@ -3,7 +3,8 @@
 
 namespace lightstage {
 
-std::unique_ptr<ControllerClient> connect_controller(const std::string& uri, ControllerClientOptions options) {
+std::unique_ptr<ControllerClient> connect_controller(const std::string& uri,
+                                                     ControllerClientOptions options) {
   // A controller that is just starting (or a USB gadget being enumerated) gets a moment to appear.
   return std::make_unique<ControllerClient>(hw::connect_link(uri, std::chrono::milliseconds(2000)),
                                             std::move(options));

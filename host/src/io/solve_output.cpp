@@ -77,8 +77,9 @@ nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const Solve
     std::vector<cv::Mat> planes;
     cv::split(result.coefficients, planes);
     nlohmann::json names = nlohmann::json::array();
-    const auto& terms = result.reflectance.is_object() ? result.reflectance.value("terms", nlohmann::json::array())
-                                                       : nlohmann::json::array();
+    const auto& terms = result.reflectance.is_object()
+                            ? result.reflectance.value("terms", nlohmann::json::array())
+                            : nlohmann::json::array();
     for (std::size_t c = 0; c < planes.size(); ++c) {
       const std::string term = c < terms.size() ? terms[c].get<std::string>() : std::to_string(c);
       const std::string name = "brdf_" + term + ".pfm";

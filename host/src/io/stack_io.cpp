@@ -200,16 +200,17 @@ void write_stack(const fs::path& dir, const ImageStack& stack, const nlohmann::j
   fs::create_directories(dir, error);
   if (error) fail("{}: cannot create folder: {}", dir.string(), error.message());
 
-  util::parallel_chunks(write_images ? stack.frames.size() : 0, 0, [&](std::size_t, std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      const fs::path path = dir / files.frames[i];
-      if (stack.frames[i].image.depth() == CV_32F) {
-        write_pfm(path, stack.frames[i].image);
-      } else {
-        write_png(path, stack.frames[i].image);
-      }
-    }
-  });
+  util::parallel_chunks(write_images ? stack.frames.size() : 0, 0,
+                        [&](std::size_t, std::size_t begin, std::size_t end) {
+                          for (std::size_t i = begin; i < end; ++i) {
+                            const fs::path path = dir / files.frames[i];
+                            if (stack.frames[i].image.depth() == CV_32F) {
+                              write_pfm(path, stack.frames[i].image);
+                            } else {
+                              write_png(path, stack.frames[i].image);
+                            }
+                          }
+                        });
   std::string names;
   for (const auto& name : files.frames) names += name + "\n";
   util::write_text_atomic(dir / "filenames.txt", names);

@@ -36,7 +36,7 @@ struct Scene {
   // uniform radiance of this much per unit LED intensity, anti-aliased at the
   // silhouette, so a chrome sphere's outline can be found in the images. 0 = none.
   double environment_radiance = 0.0;
-  bool cast_shadows = true;        // march shadow rays (height fields)
+  bool cast_shadows = true;  // march shadow rays (height fields)
 
   nlohmann::json describe() const;
 };

@@ -28,8 +28,8 @@ struct SolveResult {
   cv::Mat residual;  // CV_32FC1, RMS of the fit over the observations used, zero where not solved
   cv::Mat solved;    // CV_8UC1, 255 where solved
   // Optional per-pixel outputs (empty when a method does not produce them):
-  cv::Mat confidence;    // CV_32FC1 in [0, 1], 1 = the data fit the method's model well
-  cv::Mat coefficients;  // CV_32FC(k), a per-pixel reflectance model (see `reflectance`)
+  cv::Mat confidence;                    // CV_32FC1 in [0, 1], 1 = the data fit the method's model well
+  cv::Mat coefficients;                  // CV_32FC(k), a per-pixel reflectance model (see `reflectance`)
   nlohmann::json reflectance = nullptr;  // describes `coefficients` (model, order, term order)
   nlohmann::json parameters = nlohmann::json::object();  // the options used, for summary.json
   SolveSummary summary;
