@@ -10,9 +10,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cctype>
 #include <csignal>
 #include <fstream>
-#include <regex>
 #include <thread>
 
 namespace lightstage::testing {
@@ -45,7 +46,10 @@ std::size_t frames_on_disk(const fs::path& dir) {
   std::size_t n = 0;
   if (!fs::exists(dir)) return 0;
   for (const auto& e : fs::directory_iterator(dir)) {
-    if (std::regex_match(e.path().filename().string(), std::regex("[0-9]{3}\\.png"))) ++n;
+    const std::string name = e.path().filename().string();
+    const bool numbered_frame = name.size() == 7 && name.ends_with(".png") &&
+                                std::all_of(name.begin(), name.begin() + 3, [](unsigned char c) { return std::isdigit(c); });
+    if (numbered_frame) ++n;
   }
   return n;
 }
