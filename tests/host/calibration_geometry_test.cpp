@@ -178,6 +178,56 @@ TEST(CalibrationPositions, TriangulatesRaysAndReportsResiduals) {
   EXPECT_FALSE(triangulate({rays[0]}));
 }
 
+// The forward model inverts reflect_at, and the maximum-likelihood fit finds
+// the LED from exact highlights, with a covariance that grows as the rays
+// close up — for both camera models.
+TEST(CalibrationPositions, PredictedHighlightsReflectToTheLedAndRefineToIt) {
+  CameraGeometry ortho = CameraGeometry::unknown(512, 512);
+  ortho.pixel_pitch_mm = 0.2;
+  ortho.metric = true;
+  CameraGeometry pinhole = ortho;
+  pinhole.model = CameraModel::kPinhole;
+  pinhole.focal_px = 1500;
+  pinhole.position_mm = Vec3(0, 0, 600);
+  const Vec3 led(-150, 280, 230);
+  for (const CameraGeometry& camera : {ortho, pinhole}) {
+    SCOPED_TRACE(camera.model == CameraModel::kPinhole ? "pinhole" : "orthographic");
+    std::vector<HighlightObservation> observations;
+    for (const Vec3& centre : {Vec3(-30, 0, 0), Vec3(30, 0, 0)}) {
+      HighlightObservation o;
+      o.sphere.centre_mm = centre;
+      o.sphere.radius_mm = 20;
+      const auto uv = predict_highlight(o.sphere, camera, led);
+      ASSERT_TRUE(uv);
+      const auto reflection = reflect_at(o.sphere, camera, *uv);
+      ASSERT_TRUE(reflection);
+      EXPECT_LT(angle_between_deg(reflection->direction, (led - reflection->point_mm).normalized()), 1e-8);
+      o.centre_px = *uv;
+      o.covariance_px = Eigen::Matrix2d::Identity() * 0.02 * 0.02;
+      observations.push_back(o);
+    }
+    const auto fit = refine_led_position(observations, camera, led + Vec3(15, -10, 20));
+    ASSERT_TRUE(fit);
+    EXPECT_LT((fit->position_mm - led).norm(), 1e-6);
+    EXPECT_LT(fit->rms_px, 1e-8);
+    // 0.02 px on a 100 px sphere, rays meeting at ~7° 400 mm away: millimetres along the rays.
+    EXPECT_GT(fit->sigma_mm, 0.3);
+    EXPECT_LT(fit->sigma_mm, 5.0);
+    // The same LED seen from spheres half as far apart is known half as well.
+    std::vector<HighlightObservation> close = observations;
+    for (auto& o : close) {
+      o.sphere.centre_mm.x() /= 2;
+      o.centre_px = *predict_highlight(o.sphere, camera, led);
+    }
+    const auto close_fit = refine_led_position(close, camera, led);
+    ASSERT_TRUE(close_fit);
+    EXPECT_NEAR(close_fit->sigma_mm / fit->sigma_mm, 2.0, 0.2);
+    // One sphere position cannot place the LED.
+    EXPECT_FALSE(refine_led_position({observations[0]}, camera, led));
+    EXPECT_FALSE(refine_led_position({observations[0], observations[0]}, camera, led));
+  }
+}
+
 TEST(CalibrationPositions, RayMeetsTheDomeAtItsRadius) {
   const auto p = intersect_dome({Vec3(10, 0, 5), Vec3(1, 1, 1).normalized()}, Vec3::Zero(), 400);
   ASSERT_TRUE(p);

@@ -17,6 +17,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 
 namespace lightstage::calibration {
@@ -32,12 +33,14 @@ struct DirectionErrors {
 // Simulates `scene` on `rig` and writes it as a stack folder with the
 // simulator's manifest (camera included), as `lightstage simulate` does.
 ImageStack write_sim_stack(const Rig& rig, const std::string& scene, sim::LightModel model,
-                           const fs::path& dir, std::optional<int> width = std::nullopt) {
+                           const fs::path& dir, std::optional<int> width = std::nullopt,
+                           std::optional<double> exposure_us = std::nullopt) {
   sim::SimulateOptions o;
   o.scene = scene;
   o.light_model = model;
   o.width = width;
   o.height = width;
+  o.sensor.exposure_us = exposure_us;
   o.threads = 0;
   const ImageStack stack = sim::simulate_stack(rig, o);
   io::write_stack(dir, stack, {{"simulation", sim::describe(rig, o)}});
@@ -120,17 +123,23 @@ TEST_F(CalibrationSim, NearChromeSphereWithDomeRadiusWithinATenthOfADegree) {
   EXPECT_LT(run.calibration.nominal_fit->max_mm, 4.0);
 }
 
-// Two sphere positions triangulate every LED without the dome radius.
-// Disabled while it fails: two 20 mm sphere positions 60 mm apart triangulate
-// LEDs to 1.47 mm mean but 5.57 mm worst against the 4 mm (1% of radius)
-// target of issue 5, which stays open for it. Run it with
-// --gtest_also_run_disabled_tests.
-TEST_F(CalibrationSim, DISABLED_TwoSpherePositionsTriangulateLedsWithinOnePercentOfTheRadius) {
+// Two sphere positions triangulate every LED without the dome radius, placed
+// and exposed as docs/calibration.md recommends: a 25 mm sphere at x = ±25 mm
+// (the largest pair that fits the 102 mm field side by side) and frames
+// exposed for the highlights (6× the rig's exposure, set for matte objects:
+// the brightest highlight peaks at 73% of full scale). At the rig's exposure
+// the highlight centres scatter by 0.021 px per axis — the Cramér–Rao bound
+// of their shot noise — and the LEDs of the lowest ring along the baseline,
+// whose rays meet at under 3°, cannot be placed to 4 mm by any method
+// (20 mm spheres at ±30 mm: σ 5.5 mm, worst error 5.7 mm). The reported
+// per-LED uncertainty must match the errors.
+TEST_F(CalibrationSim, TwoSpherePositionsTriangulateLedsWithinOnePercentOfTheRadius) {
   const fs::path dir = testing::scratch_dir();
-  const fs::path left = scene_file(dir, "left", chrome_sphere_yaml(20, Vec3(-30, 0, 0)));
-  const fs::path right = scene_file(dir, "right", chrome_sphere_yaml(20, Vec3(30, 0, 0)));
-  write_sim_stack(*rig_, left.string(), sim::LightModel::kNear, dir / "left");
-  write_sim_stack(*rig_, right.string(), sim::LightModel::kNear, dir / "right");
+  const fs::path left = scene_file(dir, "left", chrome_sphere_yaml(25, Vec3(-25, 0, 0)));
+  const fs::path right = scene_file(dir, "right", chrome_sphere_yaml(25, Vec3(25, 0, 0)));
+  const double exposure_us = 6 * rig_->camera.exposure_us;
+  write_sim_stack(*rig_, left.string(), sim::LightModel::kNear, dir / "left", std::nullopt, exposure_us);
+  write_sim_stack(*rig_, right.string(), sim::LightModel::kNear, dir / "right", std::nullopt, exposure_us);
   LightCalibrationOptions o;
   o.inputs = {dir / "left", dir / "right"};
   o.rig = default_rig_path();
@@ -138,17 +147,32 @@ TEST_F(CalibrationSim, DISABLED_TwoSpherePositionsTriangulateLedsWithinOnePercen
   const auto run = calibrate_lights(o);
   const LightCalibration& cal = run.calibration;
   EXPECT_EQ(cal.direction_method, "triangulated");
-  double worst = 0, mean = 0;
+  double worst = 0, mean = 0, normalised = 0, worst_sigma = 0;
+  std::string worst_image;
   for (std::size_t i = 0; i < cal.lights.size(); ++i) {
-    ASSERT_TRUE(cal.lights[i].position_mm) << cal.lights[i].image;
-    const double error = (*cal.lights[i].position_mm - rig_->leds[i].position_mm).norm();
+    const CalibratedLight& light = cal.lights[i];
+    ASSERT_TRUE(light.position_mm) << light.image;
+    ASSERT_TRUE(light.position_sigma_mm) << light.image;
+    const double error = (*light.position_mm - rig_->leds[i].position_mm).norm();
+    if (error > worst) worst_image = light.image;
     worst = std::max(worst, error);
+    worst_sigma = std::max(worst_sigma, *light.position_sigma_mm);
     mean += error / static_cast<double>(cal.lights.size());
+    normalised += std::pow(error / *light.position_sigma_mm, 2) / static_cast<double>(cal.lights.size());
   }
+  normalised = std::sqrt(normalised);
   RecordProperty("position_mean_mm", fmt::format("{:.3f}", mean));
   RecordProperty("position_max_mm", fmt::format("{:.3f}", worst));
-  EXPECT_LT(worst, 0.01 * rig_->dome_radius_mm);
+  RecordProperty("position_max_image", worst_image);
+  RecordProperty("position_sigma_max_mm", fmt::format("{:.3f}", worst_sigma));
+  RecordProperty("rms_error_over_sigma", fmt::format("{:.3f}", normalised));
+  EXPECT_LT(worst, 0.01 * rig_->dome_radius_mm) << "worst: " << worst_image;
+  // The reported uncertainty is honest: errors are about one standard deviation.
+  EXPECT_GT(normalised, 0.5);
+  EXPECT_LT(normalised, 2.0);
   const DirectionErrors e = direction_errors(cal, *rig_);
+  RecordProperty("mean_deg", fmt::format("{:.4f}", e.mean));
+  RecordProperty("max_deg", fmt::format("{:.4f}", e.max));
   EXPECT_LT(e.mean, 0.1);
   EXPECT_LT(e.max, 0.3);
 }

@@ -68,6 +68,37 @@ std::vector<const Led*> nominal_leds(const CalibrationImages& images, const Rig&
   return leds;
 }
 
+// Triangulated positions are only as good as the highlights are bright and
+// the rays are apart: say how well they are known, and whether the exposure
+// left the highlights dim (their position noise falls as 1/√exposure).
+void report_position_accuracy(const LightCalibration& cal) {
+  if (cal.direction_method != "triangulated") return;
+  double peak = 0;
+  for (const auto& light : cal.lights)
+    for (const auto& o : light.observations)
+      if (o.highlight.usable()) peak = std::max(peak, o.highlight.peak);
+  std::vector<double> sigmas;
+  const CalibratedLight* worst = nullptr;
+  for (const auto& light : cal.lights) {
+    if (!light.position_sigma_mm) continue;
+    sigmas.push_back(*light.position_sigma_mm);
+    if (!worst || *light.position_sigma_mm > *worst->position_sigma_mm) worst = &light;
+  }
+  if (!worst) return;
+  std::nth_element(sigmas.begin(), sigmas.begin() + static_cast<std::ptrdiff_t>(sigmas.size() / 2),
+                   sigmas.end());
+  logger("host")->info(
+      "LED positions: standard deviation {:.2f} mm median, {:.2f} mm worst ({}), from highlights peaking at "
+      "{:.0f}% of full scale",
+      sigmas[sigmas.size() / 2], *worst->position_sigma_mm, worst->image, 100 * peak);
+  if (peak < 0.25)
+    logger("host")->warn(
+        "the brightest highlight peaks at {:.0f}% of full scale: a longer exposure (peaks at 50-80%) lowers "
+        "the "
+        "LED position noise as 1/sqrt(exposure)",
+        100 * peak);
+}
+
 }  // namespace
 
 void LightCalibrationOptions::check() const {
@@ -197,10 +228,12 @@ LightCalibrationRun calibrate_lights(const LightCalibrationOptions& options) {
   for (std::size_t i = 0; i < lights; ++i) {
     CalibratedLight& light = cal.lights[i];
     std::vector<Ray> rays;
+    std::vector<HighlightObservation> highlights;
     Vec3 mirror_sum = Vec3::Zero();
     for (const auto& o : light.observations) {
       if (!o.reflection) continue;
       rays.push_back({o.reflection->point_mm, o.reflection->direction});
+      highlights.push_back({cal.spheres[o.sphere].sphere, o.highlight.centre_px, o.highlight.covariance_px});
       mirror_sum += o.reflection->direction;
     }
     if (rays.empty()) {
@@ -213,6 +246,19 @@ LightCalibrationRun calibrate_lights(const LightCalibrationOptions& options) {
       if (const auto t = triangulate(rays)) {
         light.position_mm = t->position_mm;
         light.position_residual_mm = t->rms_mm;
+        // The rays' nearest point treats every ray alike; the highlights'
+        // own noise (and how it tilts each ray) decides the best position.
+        if (const auto fit = refine_led_position(highlights, cal.camera, t->position_mm)) {
+          light.position_mm = fit->position_mm;
+          light.position_sigma_mm = fit->sigma_mm;
+          light.reprojection_rms_px = fit->rms_px;
+          double sum = 0;
+          for (const auto& ray : rays) {
+            const Vec3 offset = fit->position_mm - ray.origin;
+            sum += (offset - offset.dot(ray.direction) * ray.direction).squaredNorm();
+          }
+          light.position_residual_mm = std::sqrt(sum / static_cast<double>(rays.size()));
+        }
       }
     }
     if (!light.position_mm && cal.dome_radius_mm && metric) {
@@ -229,6 +275,7 @@ LightCalibrationRun calibrate_lights(const LightCalibrationOptions& options) {
     }
     if (light.position_mm) light.direction = (*light.position_mm - cal.object_position_mm).normalized();
   }
+  report_position_accuracy(cal);
   if (!unmeasured.empty() && !options.allow_missing) {
     std::string details;
     for (const auto& p : cal.problems) details += "\n  " + p;

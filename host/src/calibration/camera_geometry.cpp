@@ -47,6 +47,20 @@ void CameraGeometry::ray(const Vec2& uv, Vec3* origin, Vec3* direction) const {
           .normalized();
 }
 
+std::optional<Vec2> CameraGeometry::project(const Vec3& point_mm) const {
+  const Vec3 d = point_mm - position_mm;
+  if (model == CameraModel::kOrthographic)
+    return Vec2(d.x() / pixel_pitch_mm + width / 2.0, height / 2.0 - d.y() / pixel_pitch_mm);
+  if (!(-d.z() > 0)) return std::nullopt;
+  return Vec2(principal_point_px.x() + focal_px * d.x() / -d.z(),
+              principal_point_px.y() - focal_px * d.y() / -d.z());
+}
+
+Vec3 CameraGeometry::toward_camera(const Vec3& point_mm) const {
+  if (model == CameraModel::kOrthographic) return Vec3::UnitZ();
+  return (position_mm - point_mm).normalized();
+}
+
 void CameraGeometry::check() const {
   if (width <= 0 || height <= 0) fail("camera: size must be positive, got {}x{}", width, height);
   if (model == CameraModel::kOrthographic && !(pixel_pitch_mm > 0 && std::isfinite(pixel_pitch_mm)))

@@ -24,10 +24,18 @@ double pixel_integral(double lo, double hi, double centre, double sigma) {
   return 0.5 * (std::erf((hi - centre) * k) - std::erf((lo - centre) * k));
 }
 
+struct Spot {
+  Vec2 centre;
+  Eigen::Matrix2d covariance;  // of the centre, px²
+};
+
 // Least-squares fit of a pixel-integrated Gaussian spot a·G(u, v, σ) + b to
 // `diff` around `start` (image points); nullopt when it does not converge to
-// a plausible spot.
-std::optional<Vec2> fit_spot(const cv::Mat& diff, const cv::Point& roi_origin, const Vec2& start,
+// a plausible spot. The centre's covariance is σ̂² (JᵀJ)⁻¹ with σ̂² the
+// window's residual variance; the spot's own shot noise makes the pixels that
+// place it noisier than that average, so it runs 20–40% low for faint spots
+// on a bright background.
+std::optional<Spot> fit_spot(const cv::Mat& diff, const cv::Point& roi_origin, const Vec2& start,
                              double peak) {
   const int cc = static_cast<int>(std::floor(start.x())) - roi_origin.x;
   const int cr = static_cast<int>(std::floor(start.y())) - roi_origin.y;
@@ -53,22 +61,28 @@ std::optional<Vec2> fit_spot(const cv::Mat& diff, const cv::Point& roi_origin, c
     for (const auto& s : samples) sum += std::pow(model(q, s) - s.value, 2);
     return sum;
   };
-  double lambda = 1e-3, current = cost(p);
-  for (int iteration = 0; iteration < 50; ++iteration) {
-    Eigen::Matrix<double, 5, 5> jtj = Eigen::Matrix<double, 5, 5>::Zero();
-    Params jtr = Params::Zero();
+  // JᵀJ and Jᵀr at q (central differences).
+  auto normal_equations = [&](const Params& q, Eigen::Matrix<double, 5, 5>* jtj, Params* jtr) {
+    jtj->setZero();
+    jtr->setZero();
     for (const auto& s : samples) {
       Params j;
       for (int k = 0; k < 5; ++k) {
-        const double h = 1e-6 * std::max(1.0, std::abs(p(k)));
-        Params plus = p, minus = p;
+        const double h = 1e-6 * std::max(1.0, std::abs(q(k)));
+        Params plus = q, minus = q;
         plus(k) += h;
         minus(k) -= h;
         j(k) = (model(plus, s) - model(minus, s)) / (2 * h);
       }
-      jtj += j * j.transpose();
-      jtr += j * (model(p, s) - s.value);
+      *jtj += j * j.transpose();
+      *jtr += j * (model(q, s) - s.value);
     }
+  };
+  double lambda = 1e-3, current = cost(p);
+  Eigen::Matrix<double, 5, 5> jtj;
+  Params jtr;
+  for (int iteration = 0; iteration < 50; ++iteration) {
+    normal_equations(p, &jtj, &jtr);
     Eigen::Matrix<double, 5, 5> damped = jtj;
     damped.diagonal() *= 1 + lambda;
     const Params step = damped.ldlt().solve(-jtr);
@@ -87,7 +101,12 @@ std::optional<Vec2> fit_spot(const cv::Mat& diff, const cv::Point& roi_origin, c
   }
   const Vec2 centre(p(1), p(2));
   if (!(p(0) > 0) || !(p(3) > 0.2 && p(3) < 4) || (centre - start).norm() > 1.5) return std::nullopt;
-  return centre;
+  normal_equations(p, &jtj, &jtr);
+  const Eigen::Matrix<double, 5, 5> inverse = jtj.inverse();
+  const double variance = current / static_cast<double>(samples.size() - 5);
+  Spot spot{centre, variance * inverse.block<2, 2>(1, 1)};
+  if (!spot.covariance.allFinite() || !(spot.covariance.determinant() > 0)) return std::nullopt;
+  return spot;
 }
 
 }  // namespace
@@ -124,8 +143,10 @@ nlohmann::json Highlight::to_json() const {
                    {"pixels", pixels},
                    {"saturated_pixels", saturated_pixels},
                    {"second_blob_ratio", second_blob_ratio}};
-  if (status == HighlightStatus::kFound || status == HighlightStatus::kAmbiguous)
+  if (status == HighlightStatus::kFound || status == HighlightStatus::kAmbiguous) {
     j["centre_px"] = {centre_px.x(), centre_px.y()};
+    j["covariance_px2"] = {covariance_px(0, 0), covariance_px(0, 1), covariance_px(1, 1)};
+  }
   if (!note.empty()) j["note"] = note;
   return j;
 }
@@ -202,8 +223,10 @@ Highlight find_highlight(const cv::Mat& grey, const cv::Mat& background, const c
   const int count = cv::connectedComponents(blobs, labels, 8, CV_32S);
   struct Blob {
     double energy = 0, su = 0, sv = 0;
+    double pu = 0, pv = 0, suu = 0, suv = 0, svv = 0;  // unweighted sums of u, v, u², uv, v²
     int pixels = 0, saturated = 0;
-    double cu = 0, cv = 0;  // centroid of saturated pixels (sums)
+    double cu = 0, cv = 0;    // centroid of saturated pixels (sums)
+    double cuu = 0, cvv = 0;  // their second moments
   };
   std::vector<Blob> found(static_cast<std::size_t>(count));
   for (int r = 0; r < roi.height; ++r) {
@@ -216,11 +239,18 @@ Highlight find_highlight(const cv::Mat& grey, const cv::Mat& background, const c
       b.energy += w;
       b.su += w * u;
       b.sv += w * v;
+      b.pu += u;
+      b.pv += v;
+      b.suu += u * u;
+      b.suv += u * v;
+      b.svv += v * v;
       ++b.pixels;
       if (saturated.at<std::uint8_t>(roi.y + r, roi.x + c) != 0) {
         ++b.saturated;
         b.cu += u;
         b.cv += v;
+        b.cuu += u * u;
+        b.cvv += v * v;
       }
     }
   }
@@ -238,10 +268,36 @@ Highlight find_highlight(const cv::Mat& grey, const cv::Mat& background, const c
   const Blob& main = found[order.front()];
   result.pixels = main.pixels;
   result.saturated_pixels = main.saturated;
-  result.centre_px = main.saturated > 0 ? Vec2(main.cu / main.saturated, main.cv / main.saturated)
-                                        : Vec2(main.su / main.energy, main.sv / main.energy);
+  if (main.saturated > 0) {
+    // The saturated core's centroid: its error comes from the pixels along the
+    // core's edge (2πr of them) that are in or out by chance, each moving it
+    // by its offset over the core's n pixels: per axis Σ (u − ū)² · 1/12 / n²
+    // with Σ (u − ū)² ≈ 2πr · r²/2 along the edge.
+    const double n = main.saturated;
+    result.centre_px = Vec2(main.cu / n, main.cv / n);
+    const double spread = (main.cuu + main.cvv) / n - result.centre_px.squaredNorm();  // ≈ r²/2 for a disk
+    const double radius = std::sqrt(std::max(2 * spread, 0.25));
+    const double variance = (2 * kPi * radius) * (radius * radius / 2) / 12 / (n * n);
+    result.covariance_px = Eigen::Matrix2d::Identity() * variance;
+  } else {
+    // The intensity-weighted centroid: Var(ū) = σ² Σ (u − ū)² / E² per pixel
+    // of noise σ, with a floor of one pixel's quantisation shared by the blob.
+    result.centre_px = Vec2(main.su / main.energy, main.sv / main.energy);
+    const Vec2 c = result.centre_px;
+    const double n = main.pixels;
+    const double uu = main.suu - 2 * c.x() * main.pu + n * c.x() * c.x();
+    const double vv = main.svv - 2 * c.y() * main.pv + n * c.y() * c.y();
+    const double uv = main.suv - c.x() * main.pv - c.y() * main.pu + n * c.x() * c.y();
+    Eigen::Matrix2d scatter;
+    scatter << uu, uv, uv, vv;
+    result.covariance_px = (noise * noise / (main.energy * main.energy)) * scatter +
+                           Eigen::Matrix2d::Identity() * (1.0 / 12.0) / (n * n);
+  }
   if (main.saturated == 0 && main.pixels <= kSmallBlobPixels) {
-    if (const auto spot = fit_spot(diff, roi.tl(), result.centre_px, peak)) result.centre_px = *spot;
+    if (const auto spot = fit_spot(diff, roi.tl(), result.centre_px, peak)) {
+      result.centre_px = spot->centre;
+      result.covariance_px = spot->covariance;
+    }
   }
   if (order.size() > 1) result.second_blob_ratio = found[order[1]].energy / main.energy;
   const double from_limb = circle.radius_px - (result.centre_px - circle.centre_px).norm();

@@ -53,6 +53,8 @@ json light_json(const CalibratedLight& light) {
   if (light.position_mm) {
     j["position_mm"] = vec3_json(*light.position_mm);
     j["position_residual_mm"] = light.position_residual_mm;
+    if (light.position_sigma_mm) j["position_sigma_mm"] = *light.position_sigma_mm;
+    if (light.reprojection_rms_px) j["reprojection_rms_px"] = *light.reprojection_rms_px;
   }
   if (light.intensity_residual) j["intensity_residual"] = *light.intensity_residual;
   if (light.nominal_position_mm) j["nominal_position_mm"] = vec3_json(*light.nominal_position_mm);
@@ -151,6 +153,10 @@ LightCalibration calibration_from_json(const json& j, const std::string& source)
       light.position_mm = vec3_value(*it, where + ".position_mm");
     if (const auto it = entry.find("position_residual_mm"); it != entry.end())
       light.position_residual_mm = number_value(*it, where + ".position_residual_mm");
+    if (const auto it = entry.find("position_sigma_mm"); it != entry.end() && !it->is_null())
+      light.position_sigma_mm = number_value(*it, where + ".position_sigma_mm");
+    if (const auto it = entry.find("reprojection_rms_px"); it != entry.end() && !it->is_null())
+      light.reprojection_rms_px = number_value(*it, where + ".reprojection_rms_px");
     light.intensity = number_value(member(entry, "intensity", where), where + ".intensity");
     if (!(light.intensity > 0)) fail("{}.intensity: must be positive, got {}", where, light.intensity);
     if (const auto it = entry.find("nominal_position_mm"); it != entry.end() && !it->is_null())

@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <optional>
 #include <string>
 
 namespace lightstage::calibration {
@@ -28,6 +29,11 @@ struct CameraGeometry {
 
   // The viewing ray through image point (u, v): origin and unit direction (toward the scene).
   void ray(const Vec2& uv, Vec3* origin, Vec3* direction) const;
+  // The image point of `point_mm` (the inverse of ray); nullopt when it lies
+  // behind a pinhole camera.
+  std::optional<Vec2> project(const Vec3& point_mm) const;
+  // Unit vector from `point_mm` back toward the camera (along the viewing ray).
+  Vec3 toward_camera(const Vec3& point_mm) const;
   // Throws InputError naming the broken field.
   void check() const;
   nlohmann::json to_json() const;

@@ -7,12 +7,15 @@
 // saturated core (blooming spreads a core but keeps it centred); when it is
 // about the size of the lens blur, a fitted pixel-integrated Gaussian spot
 // (a thresholded centroid of so few pixels is pulled toward pixel centres);
-// otherwise the intensity-weighted centroid. A second blob nearly as strong (another reflection)
-// is reported, as are frames without a highlight and overexposed frames —
-// never guessed.
+// otherwise the intensity-weighted centroid. Each centre comes with its
+// covariance from the image noise (the fit's, or the centroid's error
+// propagation), which weights it when LED positions are fitted. A second blob
+// nearly as strong (another reflection) is reported, as are frames without a
+// highlight and overexposed frames — never guessed.
 
 #include "lightstage/host/calibration/sphere_detection.hpp"
 
+#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
@@ -41,11 +44,13 @@ const char* status_name(HighlightStatus status);
 struct Highlight {
   HighlightStatus status = HighlightStatus::kMissing;
   Vec2 centre_px = Vec2::Zero();  // image point, valid when found (or ambiguous)
-  double peak = 0;                // above the median image, fraction of full scale
-  int pixels = 0;                 // in the highlight's blob
-  int saturated_pixels = 0;       // in the blob
-  double second_blob_ratio = 0;   // energy of the next blob / the highlight's
-  std::string note;               // why it is missing / ambiguous / overexposed
+  // Covariance of centre_px (px²) from the image noise, valid with centre_px.
+  Eigen::Matrix2d covariance_px = Eigen::Matrix2d::Identity();
+  double peak = 0;               // above the median image, fraction of full scale
+  int pixels = 0;                // in the highlight's blob
+  int saturated_pixels = 0;      // in the blob
+  double second_blob_ratio = 0;  // energy of the next blob / the highlight's
+  std::string note;              // why it is missing / ambiguous / overexposed
 
   // Ambiguous highlights are used (the strongest blob) but reported.
   bool usable() const { return status == HighlightStatus::kFound || status == HighlightStatus::kAmbiguous; }

@@ -37,9 +37,13 @@ struct CalibratedLight {
   Vec3 direction = Vec3::UnitZ();   // unit, from the object centre toward the light
   std::optional<Vec3> position_mm;  // the LED, dome frame
   double position_residual_mm = 0;  // triangulation: RMS distance from the rays
-  double intensity = 1.0;           // relative; mean 1 over the measured lights
-  std::optional<double> intensity_residual;  // relative RMS misfit of the intensity fit
-  std::optional<Vec3> nominal_position_mm;   // the rig's
+  // Triangulation: the position's standard deviation along its worst-determined
+  // direction, from the highlights' noise (unset for other methods).
+  std::optional<double> position_sigma_mm;
+  std::optional<double> reprojection_rms_px;  // triangulation: RMS highlight misfit of the fitted position
+  double intensity = 1.0;                     // relative; mean 1 over the measured lights
+  std::optional<double> intensity_residual;   // relative RMS misfit of the intensity fit
+  std::optional<Vec3> nominal_position_mm;    // the rig's
   std::vector<SphereObservation> observations;
 };
 
