@@ -58,11 +58,13 @@ void NaturalCaptureOptions::check() const {
 }
 
 nlohmann::json NaturalCapture::describe() const {
-  nlohmann::json frames = nlohmann::json::array();
+  // "per_frame", not "frames": a stack manifest reserves "frames" (one object
+  // per image, docs/stack-format.md), and this object may sit at its top level.
+  nlohmann::json per_frame = nlohmann::json::array();
   for (std::size_t i = 0; i < lighting.size(); ++i)
-    frames.push_back(
+    per_frame.push_back(
         {{"lighting", lighting[i].describe()}, {"response", responses[i].describe()}, {"gain", gains[i]}});
-  return {{"lighting", "natural"}, {"frames", frames}};
+  return {{"lighting", "natural"}, {"per_frame", per_frame}};
 }
 
 NaturalCapture capture_natural(const cv::Mat& normals, const cv::Mat& albedo, const cv::Mat& mask,

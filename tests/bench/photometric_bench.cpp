@@ -1,6 +1,7 @@
 // Speed of every `solve --method` on one stack, in one run: pixels per second
 // at 2 threads, with l2 and a plain read of the observation matrix (the floor
-// any solver pays) as the yardsticks. The stack: a simulated Cook–Torrance
+// any solver pays) as the yardsticks, and the radiometry that builds that
+// matrix from the frames. The stack: a simulated Cook–Torrance
 // sphere under the 96-LED default dome (distant lights), 192x192.
 //   build/bench/bench_photometric --benchmark_counters_tabular=true
 #include "lightstage/common/rig.hpp"
@@ -23,15 +24,20 @@ namespace {
 
 constexpr int kThreads = 2;
 
-const Observations& stack() {
-  static const Observations observations = [] {
+const ImageStack& images() {
+  static const ImageStack stack = [] {
     sim::SimulateOptions options;
     options.scene = "sphere";
     options.material = "cook-torrance:roughness=0.3,ks=0.5";
     options.light_model = sim::LightModel::kDistant;
     options.width = options.height = 192;
-    return make_observations(sim::simulate_stack(load_rig(default_rig_path()), options));
+    return sim::simulate_stack(load_rig(default_rig_path()), options);
   }();
+  return stack;
+}
+
+const Observations& stack() {
+  static const Observations observations = make_observations(images());
   return observations;
 }
 
@@ -59,6 +65,16 @@ void BM_ReadStack(benchmark::State& state) {
   report(state);
 }
 BENCHMARK(BM_ReadStack)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Radiometry: 16-bit frames to the observation matrix, on 2 threads (every
+// solve pays it once, after decoding the images).
+void BM_MakeObservations(benchmark::State& state) {
+  RadiometryOptions options;
+  options.threads = kThreads;
+  for (auto _ : state) benchmark::DoNotOptimize(make_observations(images(), options));
+  report(state);
+}
+BENCHMARK(BM_MakeObservations)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_L2(benchmark::State& state) {
   L2Options options;

@@ -1,6 +1,8 @@
-// Depth priors come from sensors and other tools: any 16-bit PNG, PFM or PLY
-// bytes must give a depth map or an InputError. The first byte picks the
-// format; the rest is the file.
+// Depth priors come from sensors and other tools: any 16-bit PNG, PFM, PLY or
+// EXR bytes must give a depth map or an InputError. The first byte picks the
+// format (0 png, 1 pfm, 2 ply, 3 exr, modulo 4); the rest is the file. EXR
+// headers are parsed by the loader itself (fuzzed here) before OpenCV's
+// OpenEXR decodes the pixels of a header it accepted.
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/surface/depth_prior.hpp"
 
@@ -14,8 +16,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
-  static const char* const kExtensions[] = {".png", ".pfm", ".ply"};
-  const char* ext = kExtensions[data[0] % 3];
+  static const char* const kExtensions[] = {".png", ".pfm", ".ply", ".exr"};
+  const char* ext = kExtensions[data[0] % 4];
   const std::filesystem::path path =
       std::filesystem::temp_directory_path() / ("lightstage-fuzz-depth-" + std::to_string(getpid()) + ext);
   {

@@ -66,6 +66,8 @@ struct NaturalCapture {
   std::vector<NaturalLighting> lighting;
   std::vector<Response> responses;  // per image
   std::vector<double> gains;        // per image
+  // {"lighting": "natural", "per_frame": [{"lighting", "response", "gain"}, ...]}:
+  // for a stack manifest's extra keys (none of them reserved there).
   nlohmann::json describe() const;
 };
 

@@ -1,7 +1,7 @@
 #pragma once
 // Depth priors from outside (a depth sensor, multi-view stereo, a known
-// shape): a 16-bit depth PNG, a float PFM, or a PLY mesh rendered into the
-// camera. Depth values follow camera.hpp (orthographic: height toward the
+// shape): a 16-bit depth PNG, a float PFM or EXR, or a PLY mesh rendered into
+// the camera. Depth values follow camera.hpp (orthographic: height toward the
 // camera; perspective: distance along the optical axis).
 
 #include "lightstage/host/surface/camera.hpp"
@@ -27,8 +27,9 @@ struct DepthMap {
 };
 
 // By extension: .png (16-bit grey; 0 = no depth), .pfm (one channel; 0 or not
-// finite = no depth), .ply (a mesh in the camera frame, rendered with a
-// z-buffer). The result has the camera's size; throws InputError naming the
+// finite = no depth), .exr (one HALF or FLOAT channel named Y, Z or R, read
+// through OpenCV; 0 or not finite = no depth), .ply (a mesh in the camera
+// frame, rendered with a z-buffer). The result has the camera's size; throws InputError naming the
 // file when it is unreadable, of another size, or holds no depth at all.
 DepthMap load_depth_prior(const std::filesystem::path& path, const CameraModel& camera,
                           const DepthPriorOptions& options = {});
