@@ -51,21 +51,26 @@ void add_calibrate(CLI::App& app) {
     bool json = false;
   };
   auto args = std::make_shared<Args>();
-  CLI::App* calibrate = app.add_subcommand("calibrate", "Calibrate the dome: `calibrate lights`.");
+  CLI::App* calibrate = app.add_subcommand(
+      "calibrate",
+      "Calibrate the dome from captures of calibration targets (docs/calibration.md).\n"
+      "Subcommand: lights (light directions, LED positions and intensities from chrome spheres, plus a "
+      "matte target). `solve --calibration` and `report` use what it writes.\n"
+      "Example: lightstage calibrate lights --input out/chrome --out out/cal");
   calibrate->require_subcommand(1);
   CLI::App* sub = calibrate->add_subcommand(
       "lights",
       "Light directions, LED positions and intensities from mirror spheres.\n"
-      "Each --input is a stack folder (filenames.txt + images; no light files needed) of a chrome sphere "
-      "under "
-      "each light. The sphere outline comes from --sphere, else mask.png, else the median image; each "
-      "image's "
-      "highlight gives a mirror direction. Two or more sphere positions (several --input, or --spheres 2) "
-      "triangulate LED positions; with one, the rig's dome radius places them. --intensity-input adds "
-      "relative "
-      "intensities from a matte sphere or a flat white target. Writes calibration.json, "
-      "light_directions.txt, "
-      "light_intensities.txt, lights.lp, lights_hemisphere.png and highlights.png (docs/calibration.md).\n"
+      "\n"
+      "Input: each --input is a stack folder (filenames.txt + images; no light files needed) of a chrome "
+      "sphere under each light, and the rig (camera, object position, dome radius). The sphere outline "
+      "comes from --sphere, else mask.png, else the median image; each image's highlight gives a mirror "
+      "direction. Two or more sphere positions (several --input, or --spheres 2) triangulate LED "
+      "positions; with one, the rig's dome radius places them. --intensity-input adds relative "
+      "intensities from a matte sphere or a flat white target.\n"
+      "Output, in --out: calibration.json, light_directions.txt, light_intensities.txt, lights.lp, "
+      "lights_hemisphere.png and highlights.png (docs/calibration.md); prints a summary (or --json).\n"
+      "\n"
       "Example: lightstage calibrate lights --input out/chrome --rig hw/rigs/sim-dome.yaml --out out/cal");
   sub->add_option("--input", args->inputs, "chrome-sphere stack folder (repeat for more sphere positions)")
       ->required();

@@ -62,16 +62,24 @@ std::vector<cv::Mat> take_bracket(BracketArgs& args, std::vector<double>& exposu
 void add_camera(CLI::App& app) {
   CLI::App* camera = app.add_subcommand(
       "camera",
-      "Calibrate a camera's response and check its linearity, from an exposure bracket of a still scene\n"
-      "lit by one LED. Solvers need radiance-linear images: raw sensors are; cameras with a tone curve\n"
-      "need their inverse response, which `capture --response` then applies to every frame.\n"
+      "Calibrate a camera's response and check its linearity (from an exposure bracket).\n"
+      "The bracket is of a still scene lit by one LED. Solvers need radiance-linear images: raw sensors\n"
+      "are; cameras with a tone curve need their inverse response, which `capture --response` then\n"
+      "applies to every frame.\n"
+      "Subcommands: response (writes the inverse response as JSON), linearity (prints how linear the\n"
+      "camera is, with --response after linearisation). Both drive the dome through --controller and\n"
+      "take the bracket through --camera (docs/capture.md).\n"
       "Example: lightstage camera response --controller unix:/tmp/domed.sock --camera v4l2:/dev/video0 "
       "--out response.json");
   camera->require_subcommand(1);
 
   auto response = std::make_shared<BracketArgs>();
   CLI::App* calibrate = camera->add_subcommand(
-      "response", "fit the inverse response (Debevec-Malik, OpenCV photo) and write it as JSON");
+      "response",
+      "Fit the camera's inverse response (Debevec-Malik, OpenCV photo) to an exposure bracket and write it\n"
+      "as JSON (--out), for `capture --response`; prints the linearity after linearisation.\n"
+      "Example: lightstage camera response --controller unix:/tmp/domed.sock --camera sim:/tmp/cam.sock "
+      "--out response.json");
   add_bracket_options(calibrate, *response);
   calibrate->add_option("--out", response->out, "response file to write")->required();
   calibrate->callback([response] {
@@ -101,8 +109,9 @@ void add_camera(CLI::App& app) {
   auto linearity = std::make_shared<BracketArgs>();
   CLI::App* check = camera->add_subcommand(
       "linearity",
-      "how linear the camera is (with --response: after linearisation): radiance/exposure per "
-      "exposure, relative to the median, for pixels well inside the range in every frame");
+      "How linear the camera is (with --response: after linearisation): prints radiance/exposure per\n"
+      "exposure of the bracket, relative to the median, for pixels well inside the range in every frame.\n"
+      "Example: lightstage camera linearity --controller unix:/tmp/domed.sock --camera sim:/tmp/cam.sock");
   add_bracket_options(check, *linearity);
   check->add_option("--response", linearity->response, "inverse response to apply first");
   check->add_flag("--json", linearity->json, "print the report as JSON");

@@ -1,5 +1,6 @@
 // `lightstage capture`: run the dome and the camera together and write a stack.
 #include "commands.hpp"
+#include "options.hpp"
 
 #include "lightstage/common/rig.hpp"
 #include "lightstage/host/capture/capture_session.hpp"
@@ -20,8 +21,7 @@ void add_capture(CLI::App& app) {
     std::string camera;
     std::string exposure = "auto";
     std::vector<int> leds;
-    bool quiet = false;
-    bool json = false;
+    OutputFlags output;
     CaptureOptions options;
   };
   auto args = std::make_shared<Args>();
@@ -58,19 +58,13 @@ void add_capture(CLI::App& app) {
   sub->add_option(
       "--response", args->options.response,
       "the camera's inverse response (lightstage camera response): frames are linearised to float PFM");
-  sub->add_flag("--quiet", args->quiet, "no progress line");
-  sub->add_flag("--json", args->json, "print one JSON object with the result");
-  sub->callback([args] {
+  add_output_flags(*sub, args->output, "the capture report: frames, retakes, darks, timings, out");
+  sub->callback([sub, args] {
+    apply_output_flags(*sub, args->output);
     CaptureOptions options = args->options;
-    if (args->exposure != "auto") {
-      try {
-        options.exposure_us = std::stod(args->exposure);
-      } catch (const std::exception&) {
-        fail("--exposure-us: '{}' is not a number or auto", args->exposure);
-      }
-    }
+    options.exposure_us = parse_exposure_us(args->exposure);
     options.led_ids = args->leds;
-    options.mode = args->json ? OutputMode::kJson : args->quiet ? OutputMode::kQuiet : OutputMode::kHuman;
+    options.mode = args->output.mode();
     const Rig rig = load_rig(args->rig);
     hw::register_hw_cameras();
     sim::register_sim_camera();
@@ -81,11 +75,11 @@ void add_capture(CLI::App& app) {
            controller->info().rig_name());
     }
     const CaptureReport report = capture_stack(rig, *controller, *camera, options);
-    if (args->json) {
+    if (args->output.json) {
       nlohmann::json j = report.to_json();
       j["out"] = options.out.string();
-      fmt::print("{}\n", j.dump(2));
-    } else {
+      fmt::print("{}\n", j.dump());
+    } else if (args->output.human()) {
       fmt::print("{}: {}\n", options.out.string(), report.message);
     }
   });

@@ -1,5 +1,7 @@
 #include "commands.hpp"
 
+#include "lightstage/common/error.hpp"
+
 namespace lightstage::cli {
 
 const std::vector<Command>& commands() {
@@ -21,6 +23,17 @@ const std::vector<Command>& commands() {
       {"integrate", add_integrate},
   };
   return table;
+}
+
+std::optional<double> parse_exposure_us(const std::string& text) {
+  if (text == "auto") return std::nullopt;
+  try {
+    std::size_t used = 0;
+    const double value = std::stod(text, &used);
+    if (used == text.size() && value > 0) return value;
+  } catch (const std::exception&) {
+  }
+  fail("--exposure-us: '{}' is not a positive number or auto", text);
 }
 
 }  // namespace lightstage::cli

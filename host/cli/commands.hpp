@@ -5,6 +5,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace lightstage::cli {
@@ -15,6 +17,9 @@ struct Command {
 };
 
 const std::vector<Command>& commands();
+
+// `--exposure-us` of capture and demo: microseconds, or "auto" (nullopt).
+std::optional<double> parse_exposure_us(const std::string& text);
 
 void add_demo(CLI::App& app);
 void add_simulate(CLI::App& app);

@@ -124,6 +124,10 @@ void add_ctl(CLI::App& app) {
   CLI::App* ctl =
       app.add_subcommand("ctl",
                          "Talk to a dome controller (lightstage-domed) directly: bring-up and diagnostics.\n"
+                         "Connects to --controller (docs/protocol.md) and runs one subcommand: info, status, "
+                         "abort, leds (light LEDs by hand) or run-test-sequence (every LED once, with "
+                         "triggers, and the timing). Prints what the controller answered (--json: as JSON); "
+                         "exits non-zero when it reports a fault.\n"
                          "Example: lightstage ctl --controller tcp:dome.local:7700 run-test-sequence");
   ctl->require_subcommand(1);
   ctl->add_option("--controller", args->controller,
@@ -133,34 +137,35 @@ void add_ctl(CLI::App& app) {
                   "heartbeat timeout to ask for (0 = the controller's default)");
   ctl->add_flag("--json", args->json, "machine-readable output");
 
-  ctl->add_subcommand("info", "firmware version, rig, LEDs and capabilities")->callback([args] {
-    print_info(connect(*args)->info(), args->json);
-  });
+  ctl->add_subcommand("info", "Print the controller's firmware version, rig, LEDs and capabilities.")
+      ->callback([args] { print_info(connect(*args)->info(), args->json); });
 
-  ctl->add_subcommand("status", "what the controller is doing")->callback([args] {
-    const proto::Status s = connect(*args)->status();
-    std::vector<std::uint32_t> on(s.leds_on().begin(), s.leds_on().end());
-    if (args->json) {
-      fmt::print("{}\n", nlohmann::json{{"state", proto::Status::State_Name(s.state())},
-                                        {"sequence_id", s.sequence_id()},
-                                        {"step", s.step()},
-                                        {"leds_on", on},
-                                        {"last_fault", s.last_fault()}}
-                             .dump(2));
-    } else {
-      fmt::print("state {}, sequence {}, step {}, {} LED(s) on{}\n", proto::Status::State_Name(s.state()),
-                 s.sequence_id(), s.step(), on.size(),
-                 s.last_fault().empty() ? "" : ", last fault: " + s.last_fault());
-    }
-  });
+  ctl->add_subcommand("status",
+                      "Print what the controller is doing: state, sequence and step, LEDs on, last fault.")
+      ->callback([args] {
+        const proto::Status s = connect(*args)->status();
+        std::vector<std::uint32_t> on(s.leds_on().begin(), s.leds_on().end());
+        if (args->json) {
+          fmt::print("{}\n", nlohmann::json{{"state", proto::Status::State_Name(s.state())},
+                                            {"sequence_id", s.sequence_id()},
+                                            {"step", s.step()},
+                                            {"leds_on", on},
+                                            {"last_fault", s.last_fault()}}
+                                 .dump(2));
+        } else {
+          fmt::print("state {}, sequence {}, step {}, {} LED(s) on{}\n", proto::Status::State_Name(s.state()),
+                     s.sequence_id(), s.step(), on.size(),
+                     s.last_fault().empty() ? "" : ", last fault: " + s.last_fault());
+        }
+      });
 
-  ctl->add_subcommand("abort", "abort a running sequence and darken the dome")->callback([args] {
+  ctl->add_subcommand("abort", "Abort a running sequence and darken the dome.")->callback([args] {
     connect(*args)->abort();
   });
 
   CLI::App* leds = ctl->add_subcommand(
       "leds",
-      "light the given LEDs (all others dark) for --hold-ms, then darken\n"
+      "Light the given LEDs (all others dark) for --hold-ms, then darken the dome.\n"
       "Example: lightstage ctl --controller unix:/tmp/domed.sock leds --on 3,17 --hold-ms 2000");
   leds->add_option("--on", args->on, "LED ids to light (none: all dark)")->delimiter(',');
   leds->add_option("--level", args->level, "level 0..1 (drivers without dimming accept 1 only)")
@@ -178,8 +183,9 @@ void add_ctl(CLI::App& app) {
 
   CLI::App* test = ctl->add_subcommand(
       "run-test-sequence",
-      "light every LED of the rig once in turn, with a camera trigger, as a capture would;\n"
-      "prints what happened per step and the timing lateness");
+      "Light every LED of the rig once in turn, with a camera trigger, as a capture would; prints the\n"
+      "outcome, the steps run and the timing lateness (median, p99, max; --json adds every step).\n"
+      "Example: lightstage ctl --controller unix:/tmp/domed.sock run-test-sequence --loop open");
   test->add_option("--settle-us", args->sequence.settle_us, "LED on to trigger")->capture_default_str();
   test->add_option("--exposure-us", args->sequence.exposure_us, "open loop: LED time after the trigger")
       ->capture_default_str();

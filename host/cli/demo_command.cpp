@@ -1,7 +1,8 @@
-// `lightstage demo`: the main job end to end on the simulated dome.
+// `lightstage demo`: the pipeline end to end on the simulated dome, as three processes.
 #include "commands.hpp"
+#include "dome_demo.hpp"
+#include "methods.hpp"
 #include "options.hpp"
-#include "steps.hpp"
 
 #include <fmt/format.h>
 
@@ -10,43 +11,68 @@ namespace lightstage::cli {
 void add_demo(CLI::App& app) {
   struct Args {
     std::string rig = default_rig_path().string();
-    std::string out = "out/demo";
-    double shadow_threshold = 0.02;
-    SimulateArgs sim;
+    std::string programs;
+    std::string exposure = "auto";
+    OutputFlags output;
+    DomeDemoOptions demo;
+    SolveArgs solve;
   };
   auto args = std::make_shared<Args>();
-  // The l2 solver assumes distant lights; near-light solving needs calibrated
-  // LED positions, so the demo's default world matches the solver's model.
-  args->sim.light_model = "distant";
-  CLI::App* sub =
-      app.add_subcommand("demo",
-                         "Run the pipeline end to end on the simulated dome.\n"
-                         "Simulates a stack under the rig's LEDs (OUT/stack), solves it with Lambertian "
-                         "least squares and a shadow "
-                         "threshold (OUT/result), and prints the angular error against the ground truth.\n"
-                         "Example: lightstage demo --out out/demo --scene bumps");
+  args->demo.out = "out/demo";
+  args->solve.shadow_threshold = 0.02;  // a capture has shadows: drop them
+  CLI::App* sub = app.add_subcommand(
+      "demo",
+      "Run the whole pipeline on the simulated dome, as on a rig.\n"
+      "\n"
+      "Starts lightstage-sim (a virtual gpiochip and camera) and lightstage-domed (the dome firmware on it) "
+      "as "
+      "separate processes, then, through the controller protocol and the sim: camera: captures a chrome "
+      "sphere "
+      "at two positions, calibrates light directions and LED positions from them, captures the object "
+      "(automatic "
+      "exposure, dark frames), solves it with the calibrated near lights, integrates a surface and writes "
+      "the "
+      "report. The programs are stopped after each capture and on every error.\n"
+      "Output, in --out: calibration/ (the two chrome stacks and calibration.json), stack/ (the capture, "
+      "with the "
+      "simulator's ground truth), result/ (normals, albedo, report.html), surface/ (depth.pfm, mesh.ply), "
+      "dome/ (the programs' logs) and demo.json (the summary: calibration and normal errors against the "
+      "simulator's truth, timings).\n"
+      "\n"
+      "Example: lightstage demo --out out/demo --scene bunny --method robust");
   sub->add_option("--rig", args->rig, "rig description (YAML)")->capture_default_str();
-  sub->add_option("--out", args->out, "output folder")->capture_default_str();
-  sub->add_option("--shadow-threshold", args->shadow_threshold, "solver shadow threshold")
+  sub->add_option("--out", args->demo.out, "output folder")->capture_default_str();
+  sub->add_option("--scene", args->demo.scene,
+                  "the object: a scene preset or scene YAML (docs/scene-format.md)")
       ->capture_default_str();
-  add_simulate_flags(*sub, args->sim);
-  sub->callback([args] {
-    args->sim.resolve();
-    const std::filesystem::path out = args->out;
-    const auto simulated = simulate_to_folder(args->rig, args->sim.options, out / "stack");
-    fmt::print("simulated {} frames ({}x{}) of '{}' under {} -> {}\n", simulated["frames"].get<int>(),
-               simulated["width"].get<int>(), simulated["height"].get<int>(), args->sim.options.scene,
-               args->rig, (out / "stack").string());
-    L2Options l2;
-    l2.shadow_threshold = args->shadow_threshold;
-    const auto report = solve_folder(out / "stack", RadiometryOptions{}, l2, out / "result");
-    const auto& summary = report.summary;
-    fmt::print("solved {} of {} pixels with l2 (shadow threshold {}) in {:.2f} s -> {}\n",
-               summary["pixels_solved"].get<std::size_t>(), summary["pixels_in_mask"].get<std::size_t>(),
-               l2.shadow_threshold, summary["seconds"].get<double>(), (out / "result").string());
-    if (report.error) print_error_stats(*report.error);
-    if (std::filesystem::exists(out / "result" / "report.html"))
-      fmt::print("report (open in a browser) -> {}\n", (out / "result" / "report.html").string());
+  sub->add_option("--material", args->demo.material, "material preset overriding the scene's");
+  sub->add_option("--width", args->demo.width, "image width (default: the rig camera's)");
+  sub->add_option("--height", args->demo.height, "image height (default: the rig camera's)");
+  sub->add_option("--noise", args->demo.noise, "sensor noise: none or physical")->capture_default_str();
+  sub->add_option("--seed", args->demo.seed, "sensor noise seed")->capture_default_str();
+  sub->add_option("--exposure-us", args->exposure, "object exposure in us, or auto (per LED, from a preview)")
+      ->capture_default_str();
+  sub->add_option("--dark-frames", args->demo.capture.dark_frames, "dark frames averaged per exposure")
+      ->capture_default_str();
+  sub->add_option("--programs", args->programs,
+                  "folder holding lightstage-sim and lightstage-domed (default: this program's folder)");
+  add_solve_flags(*sub, args->solve);
+  add_output_flags(*sub, args->output, "demo.json: the stages' results, errors against the truth, timings");
+  sub->callback([sub, args] {
+    apply_output_flags(*sub, args->output);
+    DomeDemoOptions demo = args->demo;
+    demo.rig = args->rig;
+    demo.programs = args->programs;
+    demo.capture.exposure_us = parse_exposure_us(args->exposure);
+    demo.mode = args->output.mode();
+    args->solve.resolve();
+    const SolveMethod& method = find_solve_method(args->solve.method);
+    demo.method_name = method.name;
+    demo.solver = [args, &method](const Observations& observations) {
+      return method.solve(observations, args->solve);
+    };
+    const nlohmann::json summary = run_dome_demo(demo);
+    if (args->output.json) fmt::print("{}\n", summary.dump());
   });
 }
 

@@ -8,12 +8,17 @@
 #include "lightstage/host/io/mask.hpp"
 #include "lightstage/host/io/normal_map.hpp"
 #include "lightstage/host/io/pfm.hpp"
+#include "lightstage/host/progress.hpp"
 #include "lightstage/host/surface/depth_prior.hpp"
 #include "lightstage/host/surface/fusion.hpp"
 #include "lightstage/host/surface/integration.hpp"
 #include "lightstage/host/surface/surface_output.hpp"
+#include "options.hpp"
 
 #include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
 
 namespace lightstage::cli {
 namespace {
@@ -27,8 +32,11 @@ struct IntegrateArgs {
   double prior_png_scale = 1.0;
   surface::IntegrationOptions integration;
   surface::FusionOptions fusion;
-  bool json = false;
+  OutputFlags output;
 };
+
+// The progress line shows the share of the linear solves done (per mille).
+constexpr std::size_t kProgressSteps = 1000;
 
 cv::Mat read_albedo(const std::filesystem::path& path) {
   const cv::Mat image = io::read_image(path);
@@ -40,6 +48,7 @@ cv::Mat read_albedo(const std::filesystem::path& path) {
 }
 
 void run(const IntegrateArgs& a) {
+  const auto start = std::chrono::steady_clock::now();
   std::filesystem::path normals_path = a.normals, albedo_path = a.albedo;
   if (!a.input.empty()) {
     // A solve result folder: normal.png, albedo.png.
@@ -67,30 +76,39 @@ void run(const IntegrateArgs& a) {
           : surface::CameraModel::perspective(mask.size(), surface::read_intrinsics(a.intrinsics));
   surface::SurfaceResult result;
   nlohmann::json extra = {{"normals", normals_path.string()}};
+  Progress progress(a.prior.empty() ? "integrate" : "fuse", kProgressSteps, "", a.output.mode());
+  const surface::SurfaceProgress on_progress = [&progress](double fraction) {
+    progress.advance_to(static_cast<std::size_t>(std::lround(fraction * kProgressSteps)));
+  };
   if (!a.prior.empty()) {
     surface::DepthPriorOptions prior_options;
     prior_options.png_scale = a.prior_png_scale;
     const surface::DepthMap prior = surface::load_depth_prior(a.prior, camera, prior_options);
     surface::FusionOptions fusion = a.fusion;
     fusion.preserve_discontinuities = a.integration.preserve_discontinuities;
-    result = surface::fuse_depth_normals(prior.depth, prior.valid, normals.normals, mask, camera, fusion);
+    result = surface::fuse_depth_normals(prior.depth, prior.valid, normals.normals, mask, camera, fusion,
+                                         on_progress);
     extra["fusion"] = fusion.to_json();
     extra["prior"] = a.prior;
   } else {
     surface::IntegrationOptions integration = a.integration;
     integration.method = surface::parse_integration_method(a.method);
     integration.perspective_mean_depth = a.mean_depth;
-    result = surface::integrate_normals(normals.normals, mask, camera, integration);
+    result = surface::integrate_normals(normals.normals, mask, camera, integration, on_progress);
     extra["integration"] = integration.to_json();
   }
+  progress.finish();
   surface::SurfaceFiles files;
   files.ply = a.mesh == "ply" || a.mesh == "both";
   files.obj = a.mesh == "obj" || a.mesh == "both";
   const nlohmann::json summary =
       surface::write_surface_outputs(a.out, result, camera, normals.normals, albedo, files, extra);
-  if (a.json) {
-    fmt::print("{}\n", summary.dump());
-  } else {
+  if (a.output.json) {
+    nlohmann::json j = summary;
+    j["out"] = a.out;
+    j["total_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    fmt::print("{}\n", j.dump());
+  } else if (a.output.human()) {
     fmt::print("surface of {} pixels in {:.2f} s ({} solver iterations) -> {}\n", result.stats.pixels,
                result.stats.seconds, result.stats.solver_iterations, a.out);
   }
@@ -103,12 +121,18 @@ void add_integrate(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "integrate",
       "Depth and a mesh from a normal map (docs/surfaces.md).\n"
+      "\n"
       "Integrates the normals over the mask (Poisson least squares, or Frankot-Chellappa for full "
-      "rectangles), or with --prior fuses them with a coarse depth map (dissertation Eq. 4.9). Writes "
-      "depth.pfm (orthographic: height toward the camera in --pixel-mm units, pixels by default, up to an "
-      "additive constant; perspective: distance along the axis, up to scale), depth.png, mesh.ply / mesh.obj "
-      "and surface.json.\n"
-      "Example: lightstage integrate --input out/result --out out/surface --mesh both");
+      "rectangles), or with --prior fuses them with a coarse depth map (dissertation Eq. 4.9).\n"
+      "Input: a `solve` result folder (--input: normal.png, albedo.png for the mesh colours) or a normal "
+      "map (--normals, 16-bit PNG in the project encoding); optionally a mask, a depth prior and the "
+      "camera (--intrinsics for perspective, else orthographic with --pixel-mm).\n"
+      "Output, in --out: depth.pfm (orthographic: height toward the camera in --pixel-mm units, pixels by "
+      "default, up to an additive constant; perspective: distance along the axis, up to scale), depth.png, "
+      "mesh.ply / mesh.obj and surface.json. Prints one line (or --json, surface.json).\n"
+      "\n"
+      "Example: lightstage integrate --input out/result --mask out/stack/mask.png --out out/surface --mesh "
+      "both");
   sub->add_option("--input", args->input, "a solve result folder (normal.png, albedo.png)");
   sub->add_option("--normals", args->normals, "normal map (16-bit PNG, project encoding)");
   sub->add_option("--mask", args->mask, "object mask (default: where the normal map has normals)");
@@ -134,8 +158,11 @@ void add_integrate(CLI::App& app) {
   sub->add_option("--mesh", args->mesh, "mesh files: ply, obj, both or none")
       ->check(CLI::IsMember({"ply", "obj", "both", "none"}))
       ->capture_default_str();
-  sub->add_flag("--json", args->json, "print surface.json on stdout");
-  sub->callback([args] { run(*args); });
+  add_output_flags(*sub, args->output, "surface.json plus out (the folder) and total_seconds");
+  sub->callback([args, sub] {
+    apply_output_flags(*sub, args->output);
+    run(*args);
+  });
 }
 
 }  // namespace lightstage::cli

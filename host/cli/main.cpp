@@ -12,8 +12,23 @@
 
 #include <exception>
 #include <iostream>
+#include <memory>
+#include <sstream>
 
 namespace {
+
+// Lists subcommands by the first line of their description: `lightstage
+// --help` stays one screen, `lightstage COMMAND --help` has the whole text.
+class SummaryFormatter : public CLI::Formatter {
+ public:
+  std::string make_subcommand(const CLI::App* sub) const override {
+    const std::string& description = sub->get_description();
+    std::stringstream out;
+    CLI::detail::format_help(out, sub->get_display_name(true), description.substr(0, description.find('\n')),
+                             get_column_width());
+    return out.str();
+  }
+};
 
 void print_version() {
   fmt::print("lightstage {}\n", lightstage::kVersion);
@@ -28,9 +43,25 @@ void print_version() {
 int main(int argc, char** argv) {
   CLI::App app{
       "lightstage: photometric stereo on a light stage. Simulate or capture image stacks under a dome of "
-      "LEDs, and turn them into surface normals, albedo and error reports.\n\n"
+      "LEDs, and turn them into surface normals, albedo, depth, meshes, relit images and error reports.\n"
+      "\n"
+      "The usual path: `simulate` (or `capture` on a rig, after `calibrate` and `camera`) writes a stack "
+      "folder; `solve` turns it into normal.png, albedo and summary.json; `integrate` makes depth and a "
+      "mesh; "
+      "`eval`, `report` and `relight` look at the result. `demo` runs the first steps end to end. Every "
+      "file format is described under docs/ (stack-format.md, solvers.md, surfaces.md, ...).\n"
+      "\n"
+      "Output: results on stdout, logs and errors on stderr. The long commands (simulate, solve, integrate, "
+      "bench, capture) draw a progress line with the time left when stderr is a terminal; --quiet turns it "
+      "off (simulate, solve, integrate and bench then print nothing but errors) and --json prints exactly "
+      "one "
+      "JSON object on stdout. Bad input exits non-zero with one line naming the flag or file. "
+      "`lightstage COMMAND --help` describes a command.\n"
+      "\n"
       "Example, end to end on the simulated dome:\n"
-      "  lightstage demo --out out/demo"};
+      "  lightstage demo --out out/demo",
+      "lightstage"};
+  app.formatter(std::make_shared<SummaryFormatter>());
   app.require_subcommand(0, 1);
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")

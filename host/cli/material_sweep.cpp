@@ -157,7 +157,14 @@ void MaterialSweepOptions::check() const {
   if (threads < 0) fail("--threads: must be 0 (automatic) or positive, got {}", threads);
 }
 
-MaterialSweepResult run_material_sweep(const MaterialSweepOptions& given) {
+std::size_t MaterialSweepOptions::cells() const {
+  const std::size_t m = materials.empty() ? default_sweep_materials().size() : materials.size();
+  const std::size_t k = methods.empty() ? default_sweep_methods().size() : methods.size();
+  return light_counts.size() * noise.size() * m * k;
+}
+
+MaterialSweepResult run_material_sweep(const MaterialSweepOptions& given,
+                                       const std::function<void(std::size_t)>& on_cells) {
   MaterialSweepResult result;
   MaterialSweepOptions& options = result.options;
   options = given;
@@ -190,6 +197,7 @@ MaterialSweepResult run_material_sweep(const MaterialSweepOptions& given) {
               stats.mean * static_cast<double>(stats.count) + 90.0 * static_cast<double>(stats.missing);
           result.errors[li][ni][mi][k] =
               total / static_cast<double>(std::max<std::size_t>(1, stats.count + stats.missing));
+          if (on_cells) on_cells(1);
         }
       }
     }

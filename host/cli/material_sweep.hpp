@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,9 @@ struct MaterialSweepOptions {
   int threads = 2;
 
   void check() const;  // throws InputError naming the flag
+  // Solves the sweep runs: light counts × noise levels × materials × methods
+  // (the defaults' sizes when materials or methods are empty).
+  std::size_t cells() const;
 };
 
 std::vector<std::string> default_sweep_materials();
@@ -52,7 +56,10 @@ struct MaterialSweepResult {
   std::string material_table(std::size_t light_index, std::size_t noise_index) const;
 };
 
-MaterialSweepResult run_material_sweep(const MaterialSweepOptions& options);
+// `on_cells`, when set, is called with 1 after every cell (one method on one
+// rendered material), on the caller's thread.
+MaterialSweepResult run_material_sweep(const MaterialSweepOptions& options,
+                                       const std::function<void(std::size_t cells)>& on_cells = {});
 
 // A per-material error plot (PNG): materials on x (sorted by the first
 // method listed), one coloured line per method.

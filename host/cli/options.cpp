@@ -1,12 +1,29 @@
 #include "options.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/log.hpp"
 #include "lightstage/sim/scene_file.hpp"
 #include "methods.hpp"
 
 #include <fmt/format.h>
 
 namespace lightstage::cli {
+
+void add_output_flags(CLI::App& sub, OutputFlags& flags, const std::string& json_what) {
+  sub.add_flag("--quiet,-q", flags.quiet, "print nothing but errors (no progress line, no result text)");
+  sub.add_flag("--json", flags.json, "print one JSON object on stdout and nothing else there: " + json_what);
+}
+
+void apply_output_flags(const CLI::App& sub, const OutputFlags& flags) {
+  const CLI::App* root = &sub;
+  while (root->get_parent() != nullptr) root = root->get_parent();
+  if (root->count("--log-level") > 0) return;  // asked for explicitly
+  if (flags.quiet) {
+    set_log_level("error");
+  } else if (flags.json) {
+    set_log_level("warn");
+  }
+}
 
 void SimulateArgs::resolve() {
   options.light_model = sim::parse_light_model(light_model);
@@ -39,7 +56,11 @@ void add_simulate_flags(CLI::App& sub, SimulateArgs& args) {
       ->capture_default_str();
   sub.add_option("--width", o.width, "image width (keeps the rig camera's field of view)");
   sub.add_option("--height", o.height, "image height");
-  sub.add_option("--seed", o.seed, "noise seed")->capture_default_str();
+  sub.add_option(
+         "--seed", o.seed,
+         "random seed: sensor noise (simulate --lighting natural: also the lightings, responses, gains "
+         "and the prior's noise)")
+      ->capture_default_str();
   sub.add_option("--noise", args.noise, "none, physical (shot + read) or signal-dependent (y + lambda*y*X)")
       ->capture_default_str();
   sub.add_option("--lambda", o.sensor.lambda, "lambda of the signal-dependent noise")->capture_default_str();
@@ -84,6 +105,11 @@ void add_solve_flags(CLI::App& sub, SolveArgs& args) {
   sub.add_flag("--no-clamp", args.no_clamp, "do not clamp normalised values to <= 1");
   sub.add_option("--threads", args.threads, "solver threads (0 = all cores)");
   add_shape_prior_flags(sub, args.shape_prior);
+}
+
+void SolveArgs::set_progress(const SolveProgress& progress) {
+  l2.progress = robust.progress = monotonic.progress = bipolynomial.progress = automatic.progress = progress;
+  shape_prior.options.progress = progress;
 }
 
 void SolveArgs::resolve() {

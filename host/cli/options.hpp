@@ -2,6 +2,7 @@
 // Binds library Options structs to CLI flags, once, for every command that
 // takes them.
 
+#include "lightstage/host/progress.hpp"
 #include "lightstage/host/radiometry.hpp"
 #include "lightstage/host/solvers/auto.hpp"
 #include "lightstage/host/solvers/bipolynomial.hpp"
@@ -18,6 +19,24 @@
 #include <string>
 
 namespace lightstage::cli {
+
+// --quiet and --json of the long commands (simulate, solve, integrate, bench):
+// on a terminal a progress line with an estimate of the time left (stderr);
+// --quiet prints nothing but errors; --json prints exactly one JSON object on
+// stdout and nothing else there.
+struct OutputFlags {
+  bool quiet = false;
+  bool json = false;
+  OutputMode mode() const {
+    return json ? OutputMode::kJson : quiet ? OutputMode::kQuiet : OutputMode::kHuman;
+  }
+  bool human() const { return !quiet && !json; }
+};
+// Adds --quiet and --json; `json_what` says what the object holds.
+void add_output_flags(CLI::App& sub, OutputFlags& flags, const std::string& json_what);
+// Call first in the callback: --quiet lowers logging to errors, --json to
+// warnings (both on stderr), unless --log-level was given.
+void apply_output_flags(const CLI::App& sub, const OutputFlags& flags);
 
 // Flags of `simulate` (and `demo`): scene, material, lights, sensor.
 struct SimulateArgs {
@@ -48,6 +67,8 @@ struct SolveArgs {
   RadiometryOptions radiometry;
   bool no_clamp = false;
   void resolve();
+  // Gives every method's options the same progress report (solve_result.hpp).
+  void set_progress(const SolveProgress& progress);
 };
 void add_solve_flags(CLI::App& sub, SolveArgs& args);
 

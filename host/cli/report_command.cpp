@@ -27,17 +27,17 @@ void add_report(CLI::App& app) {
   auto args = std::make_shared<Args>();
   CLI::App* sub = app.add_subcommand(
       "report",
-      "Write the HTML report of a solve result.\n"
-      "Reads RESULT_DIR (normal.png, albedo, summary.json, residual/confidence, depth.pfm when present), the "
-      "input "
-      "stack named in summary.json and a calibration.json when one is found, and writes one self-contained "
-      "page "
-      "(no network needed to open it): normals with the reference-sphere legend, albedo, depth relief, the "
-      "lights "
-      "on the hemisphere (nominal and calibrated), per-light statistics, residual and confidence maps, the "
-      "angular error against ground truth with its histogram, and a relighting viewer (drag the light over a "
-      "hemisphere; arrow keys work too). Parts whose inputs are missing are left out with a note. "
-      "`solve` and `demo` write RESULT_DIR/report.html themselves.\n"
+      "Write the HTML report of a solve result (docs/report.md).\n"
+      "\n"
+      "Input: RESULT_DIR (normal.png, albedo, summary.json, residual/confidence, depth.pfm when present), "
+      "the input stack named in summary.json and a calibration.json when one is found.\n"
+      "Output: one self-contained HTML page (no network needed to open it; default RESULT_DIR/report.html): "
+      "normals with the reference-sphere legend, albedo, depth relief, the lights on the hemisphere "
+      "(nominal and calibrated), per-light statistics, residual and confidence maps, the angular error "
+      "against ground truth with its histogram, and a relighting viewer (drag the light over a hemisphere; "
+      "arrow keys work too). Parts whose inputs are missing are left out with a note. `solve` and `demo` "
+      "write RESULT_DIR/report.html themselves.\n"
+      "\n"
       "Example: lightstage report out/demo/result --out out/demo/report.html");
   sub->add_option("RESULT_DIR", args->result, "solve output folder")->required();
   sub->add_option("--out", args->out, "the HTML file to write (default RESULT_DIR/report.html)");

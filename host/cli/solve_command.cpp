@@ -1,52 +1,100 @@
 // `lightstage solve`: normals and albedo from a stack folder.
 #include "commands.hpp"
+#include "lightstage/host/progress.hpp"
 #include "methods.hpp"
 #include "options.hpp"
 #include "steps.hpp"
 
 #include <fmt/format.h>
 
+#include <chrono>
+#include <memory>
+
 namespace lightstage::cli {
+namespace {
+
+// What the progress line counts for `method`: pixels for the per-pixel
+// methods (twice over for monotonic with another method's azimuth, which
+// solves every pixel first), cost evaluations for shape-prior's refinement.
+struct ProgressPlan {
+  std::string unit = "px";
+  std::size_t total = 0;
+};
+
+ProgressPlan plan_progress(const SolveArgs& args, const Observations& observations) {
+  if (args.method == "shape-prior") {
+    const auto& o = args.shape_prior.options;
+    return {"evaluations", o.refine ? static_cast<std::size_t>(o.max_evaluations) : 0};
+  }
+  const std::size_t passes = args.method == "monotonic" && args.azimuth_from != "isotropy" ? 2 : 1;
+  return {"px", observations.pixel_count() * passes};
+}
+
+}  // namespace
 
 void add_solve(CLI::App& app) {
   struct Args {
     std::string input;
     std::string out;
-    bool json = false;
+    OutputFlags output;
     SolveArgs solve;
     SolveCalibration calibration;
   };
   auto args = std::make_shared<Args>();
   CLI::App* sub = app.add_subcommand(
       "solve",
-      "Estimate surface normals and albedo from an image stack.\n"
-      "Reads a stack folder (DiLiGenT layout, e.g. from `simulate` or a public dataset), converts it to "
-      "linear "
-      "values divided by each light's intensity, and solves per pixel. Writes normal.png (16-bit, "
-      "value = round((n+1)/2*65535), red = x), normal_vis.png, albedo.png/.pfm, residual.pfm and "
-      "summary.json "
-      "(with the angular error when the stack holds Normal_gt.png).\n"
-      "Example: lightstage solve --input out/stack --method l2 --shadow-threshold 0.02 --out out/result");
+      "Estimate surface normals and albedo from an image stack (photometric stereo).\n"
+      "\n"
+      "Input: a stack folder in the DiLiGenT layout (from `simulate`, `capture` or a public data set; "
+      "docs/stack-format.md). Its images are made linear and divided by each light's intensity, then "
+      "every pixel inside mask.png is solved by --method (docs/solvers.md).\n"
+      "Output, in --out: normal.png (16-bit, value = round((n+1)/2*65535), red = x), normal_vis.png, "
+      "albedo.png/.pfm, residual.pfm, per-method extras (confidence.pfm, brdf_*.pfm), summary.json "
+      "(method, counts, time, and the angular error when the stack holds Normal_gt.png) and report.html.\n"
+      "Prints the angular error against the ground truth when there is one (or --json, summary.json).\n"
+      "\n"
+      "Example: lightstage solve --input out/stack --method robust --shadow-threshold 0.02 --out out/result");
   sub->add_option("--input", args->input, "stack folder")->required();
   sub->add_option("--out", args->out, "output folder")->required();
-  sub->add_flag("--json", args->json, "print summary.json on stdout");
   add_solve_flags(*sub, args->solve);
   sub->add_option("--calibration", args->calibration.file,
                   "light calibration (calibration.json or .lp from `calibrate lights`): its directions and "
                   "intensities replace the stack's, its LED positions give near lights");
   sub->add_flag("--distant-lights", args->calibration.distant,
                 "with --calibration: ignore LED positions (one direction per light for every pixel)");
-  sub->callback([args] {
+  add_output_flags(*sub, args->output,
+                   "summary.json plus out (the folder) and total_seconds (load, solve and write)");
+  sub->callback([args, sub] {
+    apply_output_flags(*sub, args->output);
+    const auto start = std::chrono::steady_clock::now();
     args->solve.resolve();
     const SolveMethod& method = find_solve_method(args->solve.method);
+    std::unique_ptr<Progress> progress;
     const auto report = solve_folder(
         args->input, args->solve.radiometry,
-        [&](const Observations& observations) { return method.solve(observations, args->solve); }, args->out,
-        args->calibration);
-    if (args->json) {
-      fmt::print("{}\n", report.summary.dump());
-    } else if (report.error) {
-      print_error_stats(*report.error);
+        [&](const Observations& observations) {
+          const ProgressPlan plan = plan_progress(args->solve, observations);
+          progress = std::make_unique<Progress>("solve " + args->solve.method, plan.total, plan.unit,
+                                                args->output.mode());
+          SolveArgs solve = args->solve;
+          solve.set_progress([p = progress.get()](std::size_t items) { p->advance(items); });
+          SolveResult result = method.solve(observations, solve);
+          progress->finish();
+          return result;
+        },
+        args->out, args->calibration);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (args->output.json) {
+      nlohmann::json j = report.summary;
+      j["out"] = args->out;
+      j["total_seconds"] = seconds;
+      fmt::print("{}\n", j.dump());
+    } else if (args->output.human()) {
+      const auto& s = report.summary;
+      fmt::print("{}: solved {} of {} pixels in {:.2f} s -> {}\n", s.value("method", args->solve.method),
+                 s.value("pixels_solved", std::size_t{0}), s.value("pixels_in_mask", std::size_t{0}), seconds,
+                 args->out);
+      if (report.error) print_error_stats(*report.error);
     }
   });
 }

@@ -14,11 +14,11 @@
 namespace lightstage::cli {
 
 nlohmann::json simulate_to_folder(const std::filesystem::path& rig_path, const sim::SimulateOptions& options,
-                                  const std::filesystem::path& out) {
+                                  const std::filesystem::path& out, const sim::FrameProgress& on_frames) {
   options.check();
   const Rig rig = load_rig(rig_path);
   const auto start = std::chrono::steady_clock::now();
-  const ImageStack stack = sim::simulate_stack(rig, options);
+  const ImageStack stack = sim::simulate_stack(rig, options, on_frames);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const nlohmann::json manifest = {
       {"source", "simulated"},

@@ -18,8 +18,9 @@ namespace lightstage::cli {
 
 // Simulates `rig` under `options` and writes the stack (with ground truth and
 // manifest) into `out`. Returns a JSON summary of what was written.
+// `on_frames` (optional) hears of every frame rendered (sim::simulate_stack).
 nlohmann::json simulate_to_folder(const std::filesystem::path& rig_path, const sim::SimulateOptions& options,
-                                  const std::filesystem::path& out);
+                                  const std::filesystem::path& out, const sim::FrameProgress& on_frames = {});
 
 struct SolveReport {
   nlohmann::json summary;                  // as written to summary.json

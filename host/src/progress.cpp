@@ -36,6 +36,13 @@ void Progress::advance(std::size_t items) {
   if (visible_) draw(false);
 }
 
+void Progress::advance_to(std::size_t done) {
+  std::size_t now = done_;
+  while (now < done && !done_.compare_exchange_weak(now, done)) {
+  }
+  if (visible_) draw(false);
+}
+
 std::string Progress::line(std::chrono::steady_clock::duration elapsed) const {
   const double seconds = std::chrono::duration<double>(elapsed).count();
   const std::size_t done = done_, total = total_;
@@ -44,6 +51,7 @@ std::string Progress::line(std::chrono::steady_clock::duration elapsed) const {
   std::string eta = "ETA --";
   // The estimate assumes the rate so far holds; it is shown once there is a rate.
   if (done > 0 && seconds > 0.2) eta = "ETA " + seconds_text(seconds * (1 - fraction) / fraction);
+  if (unit_.empty()) return fmt::format("{}  {:3.0f}%  {}", label_, 100 * fraction, eta);
   return fmt::format("{}  {:3.0f}% {}/{} {}  {}", label_, 100 * fraction, done, total, unit_, eta);
 }
 

@@ -78,7 +78,7 @@ nlohmann::json World::describe() const {
   return j;
 }
 
-ImageStack simulate_stack(const Rig& rig, const SimulateOptions& options) {
+ImageStack simulate_stack(const Rig& rig, const SimulateOptions& options, const FrameProgress& on_frames) {
   const auto start = std::chrono::steady_clock::now();
   const World world(rig, options);
   ImageStack stack;
@@ -88,6 +88,7 @@ ImageStack simulate_stack(const Rig& rig, const SimulateOptions& options) {
   stack.frames.resize(rig.leds.size());
   parallel_for(static_cast<int>(rig.leds.size()), std::min(resolve_threads(options.threads), 2), [&](int i) {
     stack.frames[static_cast<std::size_t>(i)] = world.frame(static_cast<std::size_t>(i));
+    if (on_frames) on_frames(1);
   });
   stack.mask = world.renderer().mask().clone();
   stack.ground_truth = GroundTruth{world.renderer().ground_truth().normals.clone(),

@@ -69,54 +69,31 @@ std::vector<std::string> Timeline::leds_left_on() const {
   return on;
 }
 
-SimulatedDome::SimulatedDome(DomeOptions options) : options_(std::move(options)) {
-  if (options_.rig.empty()) options_.rig = source_dir() / "hw/rigs/sim-dome.yaml";
-  dir_ = scratch_dir();
-  sim_socket_ = socket_dir() / (std::to_string(reinterpret_cast<std::uintptr_t>(this)) + "-sim.sock");
-  controller_socket_ =
-      socket_dir() / (std::to_string(reinterpret_cast<std::uintptr_t>(this)) + "-domed.sock");
-  camera_socket_ = socket_dir() / (std::to_string(reinterpret_cast<std::uintptr_t>(this)) + "-camera.sock");
-  timeline_file_ = dir_ / "timeline.jsonl";
+namespace {
 
-  std::vector<std::string> sim_args = {"--rig",      options_.rig.string(),
-                                       "--listen",   "unix:" + sim_socket_.string(),
-                                       "--timeline", timeline_file_.string()};
-  if (options_.camera) {
-    sim_args.push_back("--camera");
-    sim_args.push_back("unix:" + camera_socket_.string());
-  }
-  sim_args.insert(sim_args.end(), options_.sim_args.begin(), options_.sim_args.end());
-  sim_ = std::make_unique<ChildProcess>(bin_dir() / "lightstage-sim", sim_args, dir_ / "sim.log");
-  if (!sim_->wait_for_output("listening on", kStartTimeout)) {
-    throw std::runtime_error("lightstage-sim did not start:\n" + sim_->output());
-  }
-  start_firmware();
+SimulatedDomeOptions fixture_options(DomeOptions options) {
+  SimulatedDomeOptions o;
+  o.rig = options.rig.empty() ? source_dir() / "hw/rigs/sim-dome.yaml" : options.rig;
+  o.log_dir = scratch_dir();
+  // One socket folder per dome: a test may run several side by side.
+  static int domes = 0;
+  o.socket_dir = socket_dir() / std::to_string(++domes);
+  o.program_dir = bin_dir();
+  o.sim_args = std::move(options.sim_args);
+  o.firmware_args = std::move(options.firmware_args);
+  o.camera = options.camera;
+  o.timeline = true;
+  o.start_timeout = kStartTimeout;
+  return o;
 }
 
-void SimulatedDome::start_firmware() {
-  std::vector<std::string> fw_args = {
-      "--rig", options_.rig.string(), "--gpio", "sim:" + sim_socket_.string(), "--listen", controller_uri()};
-  fw_args.insert(fw_args.end(), options_.firmware_args.begin(), options_.firmware_args.end());
-  firmware_.reset();
-  firmware_ = std::make_unique<ChildProcess>(bin_dir() / "lightstage-domed", fw_args,
-                                             dir_ / fmt::format("domed-{}.log", ++firmware_starts_));
-  if (!firmware_->wait_for_output("listening on", kStartTimeout)) {
-    throw std::runtime_error("lightstage-domed did not start:\n" + firmware_->output() + "\nsim:\n" +
-                             sim_->output());
-  }
-}
+}  // namespace
 
-void SimulatedDome::restart_firmware() { start_firmware(); }
+SimulatedDome::SimulatedDome(DomeOptions options)
+    : lightstage::SimulatedDome(fixture_options(std::move(options))) {}
 
 SimulatedDome::~SimulatedDome() {
   if (::testing::Test::HasFailure()) std::fprintf(stderr, "%s\n", logs().c_str());
-  firmware_.reset();
-  sim_.reset();
-}
-
-std::string SimulatedDome::logs() const {
-  return "--- lightstage-domed log ---\n" + (firmware_ ? firmware_->output() : "") +
-         "--- lightstage-sim log ---\n" + (sim_ ? sim_->output() : "");
 }
 
 std::unique_ptr<ControllerClient> SimulatedDome::connect(ControllerClientOptions options) const {
@@ -125,11 +102,9 @@ std::unique_ptr<ControllerClient> SimulatedDome::connect(ControllerClientOptions
 }
 
 Timeline SimulatedDome::stop_and_read_timeline() {
-  firmware_->signal(SIGTERM);
-  const auto fw_exit = firmware_->wait(std::chrono::seconds(10));
-  EXPECT_EQ(fw_exit, std::optional<int>(0)) << "lightstage-domed should exit cleanly on SIGTERM";
-  sim_->signal(SIGTERM);
-  EXPECT_EQ(sim_->wait(std::chrono::seconds(10)), std::optional<int>(0));
+  const ExitCodes codes = stop();
+  EXPECT_EQ(codes.firmware, 0) << "lightstage-domed should exit cleanly on SIGTERM";
+  EXPECT_EQ(codes.sim, 0);
   return read_timeline();
 }
 

@@ -4,7 +4,7 @@
 // backend) — and reads back the sim's recorded line timeline.
 
 #include "lightstage/host/controller/controller_client.hpp"
-#include "lightstage/testing/child_process.hpp"
+#include "lightstage/host/demo/simulated_dome.hpp"
 
 #include <cstdint>
 #include <filesystem>
@@ -50,31 +50,17 @@ struct DomeOptions {
   bool camera = false;                     // serve the virtual camera too (sim_args set the scene)
 };
 
-class SimulatedDome {
+// The host's SimulatedDome in the test's scratch folder, with the timeline
+// recorded and both programs' logs printed when the test failed.
+class SimulatedDome : public lightstage::SimulatedDome {
  public:
   explicit SimulatedDome(DomeOptions options = {});
   ~SimulatedDome();
 
-  std::string controller_uri() const { return "unix:" + controller_socket_.string(); }
-  std::string camera_uri() const { return "sim:" + camera_socket_.string(); }
-  // Starts lightstage-domed again (after a test killed it), on the same sockets.
-  void restart_firmware();
   std::unique_ptr<ControllerClient> connect(ControllerClientOptions options = {}) const;
-  ChildProcess& sim() { return *sim_; }
-  ChildProcess& firmware() { return *firmware_; }
-  // Stops the firmware (SIGTERM) and the sim, then loads the timeline.
+  // Stops the firmware (SIGTERM) and the sim, expects clean exits, then loads the timeline.
   Timeline stop_and_read_timeline();
-  Timeline read_timeline() const { return Timeline::load(timeline_file_); }
-  std::filesystem::path rig() const { return options_.rig; }
-  std::string logs() const;
-
- private:
-  DomeOptions options_;
-  void start_firmware();
-
-  std::filesystem::path dir_, sim_socket_, controller_socket_, camera_socket_, timeline_file_;
-  int firmware_starts_ = 0;
-  std::unique_ptr<ChildProcess> sim_, firmware_;
+  Timeline read_timeline() const { return Timeline::load(timeline_file()); }
 };
 
 // Writes a copy of `rig` with every LED's limits replaced, for safety tests.

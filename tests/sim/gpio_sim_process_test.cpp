@@ -2,9 +2,9 @@
 // the --timeline file (also after SIGKILL), SIGTERM with socket removal, and
 // bad command lines.
 #include "gpio_test_support.hpp"
+#include "lightstage/common/child_process.hpp"
 #include "lightstage/common/clock.hpp"
 #include "lightstage/sim/gpio/sim_chip.hpp"
-#include "lightstage/testing/child_process.hpp"
 #include "lightstage/testing/paths.hpp"
 #include "lightstage/testing/run.hpp"
 
@@ -17,8 +17,8 @@
 namespace lightstage::sim::gpio {
 namespace {
 
+using lightstage::ChildProcess;
 using lightstage::testing::bin_dir;
-using lightstage::testing::ChildProcess;
 
 constexpr auto kStartTimeout = std::chrono::seconds(20);
 

@@ -185,17 +185,21 @@ Batch CaptureRun::run_batch_once(const std::vector<Shot>& shots) {
   std::exception_ptr camera_error;
   const auto wait_limit = std::chrono::milliseconds(static_cast<int>(1000 + 3 * exposure_us / 1000));
   std::thread reader([&] {
-    Clock::time_point done_at{};
+    // A camera may deliver well after the sequence (slow readout, a busy
+    // link): while frames keep coming it is late, not dropping them, so the
+    // wait counts from the later of the sequence's end and the last frame.
+    Clock::time_point quiet_since{};
     try {
       for (;;) {
         if (auto frame = cam_.wait_frame(std::chrono::milliseconds(20))) {
           const std::lock_guard lock(frames_mutex);
           frames.push_back(std::move(*frame));
+          if (sequence_done) quiet_since = Clock::now();
         }
         if (!sequence_done) continue;
-        if (done_at == Clock::time_point{}) done_at = Clock::now();
+        if (quiet_since == Clock::time_point{}) quiet_since = Clock::now();
         const std::lock_guard lock(frames_mutex);
-        if (frames.size() >= shots.size() || Clock::now() - done_at > wait_limit) return;
+        if (frames.size() >= shots.size() || Clock::now() - quiet_since > wait_limit) return;
       }
     } catch (...) {
       camera_error = std::current_exception();

@@ -39,6 +39,7 @@ SolveResult solve_auto(const Observations& observations, const AutoOptions& opti
   detail::DriverSettings settings;
   settings.method = "auto";
   settings.threads = options.threads;
+  settings.progress = options.progress;
   settings.drop_saturated = bipolynomial.drop_saturated;
   settings.coefficient_count = bipolynomial_term_count(bipolynomial.order);
   SolveResult result;

@@ -162,6 +162,7 @@ SolveResult solve_bipolynomial(const Observations& observations, const BiPolynom
   detail::DriverSettings settings;
   settings.method = bipolynomial_name(options.order);
   settings.threads = options.threads;
+  settings.progress = options.progress;
   settings.drop_saturated = options.drop_saturated;
   settings.coefficient_count = terms;
   SolveResult result;

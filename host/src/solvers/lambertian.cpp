@@ -1,6 +1,7 @@
 #include "lightstage/host/solvers/lambertian.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "solvers/pixel_driver.hpp"
 #include "util/parallel.hpp"
 
 #include <Eigen/Dense>
@@ -48,6 +49,7 @@ Counters solve_all(const Observations& obs, const L2Options& options, Maps& maps
   Counters total;
   if (images < options.min_observations) {
     total.too_few = pixels;
+    if (options.progress) options.progress(pixels);
     return total;
   }
   const Eigen::MatrixX3d& lights = obs.lights;
@@ -56,6 +58,7 @@ Counters solve_all(const Observations& obs, const L2Options& options, Maps& maps
   const Eigen::Vector3d lambda = eigen.eigenvalues();
   if (!(lambda(0) > kMinEigenvalueRatio * lambda(2))) {
     total.degenerate = pixels;
+    if (options.progress) options.progress(pixels);
     return total;
   }
   const Eigen::Matrix<double, 3, Eigen::Dynamic> pinv = gram.inverse() * lights.transpose();
@@ -63,7 +66,9 @@ Counters solve_all(const Observations& obs, const L2Options& options, Maps& maps
   util::parallel_chunks(pixels, options.threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
     Counters& counters = per_chunk[chunk];
     Eigen::VectorXd values(images);
+    detail::ProgressBatch batch(options.progress);
     for (std::size_t p = begin; p < end; ++p) {
+      batch.tick();
       values = obs.intensities.row(static_cast<Eigen::Index>(p)).transpose().cast<double>();
       const Eigen::Vector3d s = pinv * values;
       const double rms = std::sqrt((lights * s - values).squaredNorm() / static_cast<double>(images));
@@ -96,7 +101,9 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
     Eigen::MatrixX3d near_directions;
     Eigen::VectorXd near_gains;
     Eigen::VectorXf corrected(images);
+    detail::ProgressBatch batch(options.progress);
     for (std::size_t p = begin; p < end; ++p) {
+      batch.tick();
       const auto observed = obs.intensities.row(static_cast<Eigen::Index>(p));
       corrected = observed.transpose();
       if (obs.near) {

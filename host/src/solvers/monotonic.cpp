@@ -283,6 +283,7 @@ SolveResult solve_monotonic(const Observations& observations, const MonotonicOpt
   detail::DriverSettings settings;
   settings.method = "monotonic";
   settings.threads = options.threads;
+  settings.progress = options.progress;
   settings.drop_saturated = options.drop_saturated;
   SolveResult result;
   detail::run_per_pixel(

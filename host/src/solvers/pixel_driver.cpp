@@ -37,7 +37,9 @@ double run_per_pixel(const Observations& observations, const DriverSettings& set
     const PixelCore core = make_core();
     PixelObservations data;
     PixelOutcome outcome;
+    ProgressBatch batch(settings.progress);
     for (std::size_t p = begin; p < end; ++p) {
+      batch.tick();
       load_pixel(observations, p, settings.drop_saturated, data);
       outcome = PixelOutcome{};
       core(data, p, outcome);

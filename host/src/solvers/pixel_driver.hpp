@@ -27,11 +27,34 @@ struct PixelOutcome {
 // A core solves one pixel; each worker thread gets its own (own workspace).
 using PixelCore = std::function<void(const PixelObservations&, std::size_t pixel, PixelOutcome&)>;
 
+// Counts one worker's pixels and hands them to a SolveProgress in batches (and
+// the rest when it goes out of scope), so workers rarely touch shared state.
+class ProgressBatch {
+ public:
+  explicit ProgressBatch(const SolveProgress& progress) : progress_(progress) {}
+  ~ProgressBatch() { flush(); }
+  ProgressBatch(const ProgressBatch&) = delete;
+  ProgressBatch& operator=(const ProgressBatch&) = delete;
+  void tick() {
+    if (progress_ && ++pending_ == kBatch) flush();
+  }
+  void flush() {
+    if (progress_ && pending_ > 0) progress_(pending_);
+    pending_ = 0;
+  }
+
+ private:
+  static constexpr std::size_t kBatch = 256;
+  const SolveProgress& progress_;
+  std::size_t pending_ = 0;
+};
+
 struct DriverSettings {
   std::string method;          // summary.method
   int threads = 0;             // 0 = hardware concurrency
   bool drop_saturated = true;  // passed to load_pixel
   int coefficient_count = 0;   // > 0: a CV_32FC(k) coefficient map is written
+  SolveProgress progress;      // pixels done; empty = none
 };
 
 // Runs `make_core()` once per worker and the core once per pixel. Fills every

@@ -190,6 +190,7 @@ SolveResult solve_robust(const Observations& observations, const RobustOptions& 
   detail::DriverSettings settings;
   settings.method = "robust";
   settings.threads = options.threads;
+  settings.progress = options.progress;
   settings.drop_saturated = options.drop_saturated;
   SolveResult result;
   detail::run_per_pixel(

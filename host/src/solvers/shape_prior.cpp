@@ -173,10 +173,22 @@ SolveResult solve_shape_prior(const Observations& obs, const cv::Mat& prior_norm
       const double scale = std::max(A0.col(c).cwiseAbs().maxCoeff(), 1e-12);
       for (int r = 0; r < k; ++r) step[c * k + r] = 0.1 * scale;
     }
+    // Progress in batches of evaluations; the rest is reported when the search stops early.
+    constexpr std::size_t kReportEvery = 64;
+    std::size_t unreported = 0, reported = 0;
     const auto nm = solvers::nelder_mead(
-        [&](const Eigen::VectorXd& x) { return cost(Eigen::Map<const Eigen::MatrixXd>(x.data(), k, 3)); }, x0,
-        step, options.max_evaluations);
+        [&](const Eigen::VectorXd& x) {
+          if (options.progress && ++unreported == kReportEvery) {
+            options.progress(unreported);
+            reported += unreported;
+            unreported = 0;
+          }
+          return cost(Eigen::Map<const Eigen::MatrixXd>(x.data(), k, 3));
+        },
+        x0, step, options.max_evaluations);
     evaluations = nm.evaluations;
+    const auto budget = static_cast<std::size_t>(options.max_evaluations);
+    if (options.progress && reported < budget) options.progress(budget - reported);
     if (nm.value < initial_cost) {
       A = Eigen::Map<const Eigen::MatrixXd>(nm.x.data(), k, 3);
       final_cost = nm.value;

@@ -30,8 +30,8 @@ nlohmann::json FusionOptions::to_json() const {
 }
 
 SurfaceResult fuse_depth_normals(const cv::Mat& prior, const cv::Mat& prior_valid, const cv::Mat& normals,
-                                 const cv::Mat& mask, const CameraModel& camera,
-                                 const FusionOptions& options) {
+                                 const cv::Mat& mask, const CameraModel& camera, const FusionOptions& options,
+                                 const SurfaceProgress& progress) {
   options.check();
   const auto start = std::chrono::steady_clock::now();
   const GradientField field = gradient_field(normals, mask, camera, options.max_slope, "fuse");
@@ -61,6 +61,7 @@ SurfaceResult fuse_depth_normals(const cv::Mat& prior, const cv::Mat& prior_vali
   s.scale = options.discontinuity_scale;
   s.tolerance = options.tolerance;
   s.max_iterations = options.max_iterations;
+  s.progress = progress;
   SurfaceResult result;
   const cv::Mat w = solve_surface(field, weight, w_prior, s, result.stats);
   result.depth = cv::Mat::zeros(normals.size(), CV_32FC1);

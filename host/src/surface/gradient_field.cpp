@@ -121,6 +121,16 @@ cv::Mat solve_surface(const GradientField& field, const cv::Mat& data_weight, co
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c) stats.pixels += field.inside.at<std::uint8_t>(r, c) ? 1 : 0;
   const int rounds = options.reweight ? options.reweight_iterations + 1 : 1;
+  // Progress: round r covers [r, r + 1) / rounds; within it, the share of the
+  // way from residual 1 to the round's tolerance on a log scale (what
+  // conjugate gradients' roughly geometric convergence makes linear in time).
+  double reported = 0;
+  auto report = [&](double fraction) {
+    if (options.progress && fraction > reported) {
+      reported = fraction;
+      options.progress(fraction);
+    }
+  };
   for (int round = 0; round < rounds; ++round) {
     GridSystem system(rows, cols);
     for (int r = 0; r < rows; ++r)
@@ -138,8 +148,16 @@ cv::Mat solve_surface(const GradientField& field, const cv::Mat& data_weight, co
     }
     // Intermediate reweighting rounds need only a rough solution.
     const bool last = round + 1 == rounds;
-    const GridSolveStats s = solve_grid(
-        system, w, last ? options.tolerance : std::max(options.tolerance, 1e-4), options.max_iterations);
+    const double tolerance = last ? options.tolerance : std::max(options.tolerance, 1e-4);
+    std::function<void(double)> on_iteration;
+    if (options.progress) {
+      on_iteration = [&, round, tolerance](double residual) {
+        const double share =
+            residual <= tolerance ? 1.0 : std::clamp(std::log(residual) / std::log(tolerance), 0.0, 1.0);
+        report((round + share) / rounds);
+      };
+    }
+    const GridSolveStats s = solve_grid(system, w, tolerance, options.max_iterations, on_iteration);
     stats.solver_iterations += s.iterations;
     stats.relative_residual = s.relative_residual;
     if (last) break;
@@ -163,6 +181,7 @@ cv::Mat solve_surface(const GradientField& field, const cv::Mat& data_weight, co
     }
     stats.reweight_rounds = round + 1;
   }
+  report(1.0);
   double sum_sq = 0;
   for (const Edge& e : edges) sum_sq += residual_of(e, w, cols) * residual_of(e, w, cols);
   stats.rms_gradient_residual = edges.empty() ? 0 : std::sqrt(sum_sq / static_cast<double>(edges.size()));

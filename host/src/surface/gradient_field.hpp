@@ -28,6 +28,7 @@ struct SurfaceSolveOptions {
   double scale = 0;  // Cauchy σ; 0 = automatic
   double tolerance = 1e-7;
   int max_iterations = 1000;
+  SurfaceProgress progress;  // integration.hpp; empty = none
 };
 
 // Least squares over the field's edges plus data_weight·(w − w_prior)² where

@@ -252,7 +252,7 @@ double dot(const std::vector<double>& a, const std::vector<double>& b) {
 }  // namespace
 
 GridSolveStats solve_grid(const GridSystem& system, std::vector<double>& x, double tolerance,
-                          int max_iterations) {
+                          int max_iterations, const std::function<void(double)>& on_iteration) {
   Level fine;
   fine.rows = system.rows;
   fine.cols = system.cols;
@@ -285,6 +285,7 @@ GridSolveStats solve_grid(const GridSystem& system, std::vector<double>& x, doub
   double rz = dot(r, z);
   for (int it = 0; it < max_iterations; ++it) {
     stats.relative_residual = std::sqrt(dot(r, r)) / b_norm;
+    if (on_iteration) on_iteration(stats.relative_residual);
     if (stats.relative_residual <= tolerance) {
       stats.converged = true;
       break;

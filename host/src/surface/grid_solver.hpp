@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace lightstage::surface {
@@ -41,8 +42,10 @@ struct GridSolveStats {
 // Solves A x = b to ‖b − A x‖ ≤ tolerance · ‖b‖; `x` holds the initial guess
 // (resized and zeroed when its size is wrong) and receives the solution, 0
 // outside. A singular A (pure integration) is fine: the solution is then one
-// of the minimisers; callers fix the additive constant.
+// of the minimisers; callers fix the additive constant. `on_iteration`, when
+// set, receives the relative residual before every iteration.
 GridSolveStats solve_grid(const GridSystem& system, std::vector<double>& x, double tolerance = 1e-7,
-                          int max_iterations = 500);
+                          int max_iterations = 500,
+                          const std::function<void(double relative_residual)>& on_iteration = {});
 
 }  // namespace lightstage::surface

@@ -104,7 +104,7 @@ nlohmann::json SurfaceStats::to_json() const {
 }
 
 SurfaceResult integrate_normals(const cv::Mat& normals, const cv::Mat& mask, const CameraModel& camera,
-                                const IntegrationOptions& options) {
+                                const IntegrationOptions& options, const SurfaceProgress& progress) {
   options.check();
   const auto start = std::chrono::steady_clock::now();
   const GradientField field = gradient_field(normals, mask, camera, options.max_slope, "integrate");
@@ -113,6 +113,7 @@ SurfaceResult integrate_normals(const cv::Mat& normals, const cv::Mat& mask, con
   if (options.method == IntegrationMethod::kFrankotChellappa) {
     w = frankot_chellappa(field);
     result.stats.pixels = static_cast<std::size_t>(cv::countNonZero(field.inside));
+    if (progress) progress(1.0);  // one direct solve
   } else {
     SurfaceSolveOptions s;
     s.reweight = options.preserve_discontinuities;
@@ -120,6 +121,7 @@ SurfaceResult integrate_normals(const cv::Mat& normals, const cv::Mat& mask, con
     s.scale = options.discontinuity_scale;
     s.tolerance = options.tolerance;
     s.max_iterations = options.max_iterations;
+    s.progress = progress;
     w = solve_surface(field, {}, {}, s, result.stats);
   }
   // Fix the free constant: mean 0 (orthographic) or the requested mean depth (perspective).

@@ -1,5 +1,6 @@
 #pragma once
-// Progress of a long command on the terminal: "solve  41% 6512/15791 px  ETA 3.1 s".
+// Progress of a long command on the terminal: "solve  41% 6512/15791 px  ETA 3.1 s"
+// (or "integrate  41%  ETA 3.1 s" when the unit is empty: a share, not a count).
 // Drawn on stderr only when stderr is a terminal and the command is not
 // --quiet or --json, so logs, pipes and CI output stay clean. Thread-safe:
 // workers call advance() as they finish items; redraws are rate-limited.
@@ -22,6 +23,7 @@ enum class OutputMode {
 class Progress {
  public:
   // `unit` names the items ("frames", "px"); `total` may be 0 when unknown.
+  // An empty `unit` shows only the share done (e.g. total 1000 = per mille).
   Progress(std::string label, std::size_t total, std::string unit, OutputMode mode = OutputMode::kHuman,
            std::FILE* stream = stderr);
   ~Progress();  // finishes the line
@@ -29,6 +31,9 @@ class Progress {
   Progress& operator=(const Progress&) = delete;
 
   void advance(std::size_t items = 1);
+  // Raises the count to `done` (never lowers it): for work that reports where
+  // it is rather than what it just finished.
+  void advance_to(std::size_t done);
   void set_total(std::size_t total);
   std::size_t done() const { return done_; }
   // Clears the progress line (before printing something else), then finishes.

@@ -19,7 +19,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -66,7 +68,12 @@ class World {
   Renderer renderer_;
 };
 
-ImageStack simulate_stack(const Rig& rig, const SimulateOptions& options);
+// `on_frames`, when set, is called with the number of frames just rendered
+// (from the rendering threads, so it must be thread-safe), e.g. for a
+// progress line.
+using FrameProgress = std::function<void(std::size_t frames)>;
+ImageStack simulate_stack(const Rig& rig, const SimulateOptions& options,
+                          const FrameProgress& on_frames = {});
 
 // scene_presets() (names for --help) comes from scene_file.hpp.
 

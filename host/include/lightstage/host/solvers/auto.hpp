@@ -38,6 +38,7 @@ struct AutoOptions {
   double monotonic_margin = 1.0;     // s_m − s_b needed to prefer the monotonic answer, [0, 1]
   bool select_order = true;          // BIC choice between bilinear and biquadratic (else biquadratic)
   int threads = 0;                   // overrides both candidates' threads
+  SolveProgress progress;            // pixels done (solve_result.hpp; the candidates' own are not used)
 
   void check() const;  // throws InputError naming the field and value
   nlohmann::json to_json() const;

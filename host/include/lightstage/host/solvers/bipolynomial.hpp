@@ -32,6 +32,7 @@ struct BiPolynomialOptions {
   double tolerance = 1e-7;         // stop when the squared residual changes less
   bool drop_saturated = true;      // drop observations flagged saturated
   int threads = 0;                 // 0 = hardware concurrency; results do not depend on it
+  SolveProgress progress;          // pixels done (solve_result.hpp); not part of to_json()
 
   void check() const;  // throws InputError naming the field and value
   nlohmann::json to_json() const;

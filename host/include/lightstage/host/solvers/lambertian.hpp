@@ -24,6 +24,7 @@ struct L2Options {
   int min_observations = 3;
   // Worker threads over pixels; 0 = hardware concurrency. Results do not depend on it.
   int threads = 0;
+  SolveProgress progress;  // pixels done (solve_result.hpp); not part of to_json()
 
   // Throws InputError naming the broken field and value.
   void check() const;

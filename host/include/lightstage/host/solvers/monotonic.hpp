@@ -47,6 +47,7 @@ struct MonotonicOptions {
   int ring_neighbours = 4;
   bool drop_saturated = true;
   int threads = 0;
+  SolveProgress progress;  // pixels done (solve_result.hpp); not part of to_json()
 
   void check() const;  // throws InputError naming the field and value
   nlohmann::json to_json() const;

@@ -43,6 +43,7 @@ struct RobustOptions {
   int min_observations = 3;        // fewer left after selection: rejected (≥ 3)
   bool drop_saturated = true;
   int threads = 0;
+  SolveProgress progress;  // pixels done (solve_result.hpp); not part of to_json()
 
   void check() const;  // throws InputError naming the field and value
   nlohmann::json to_json() const;

@@ -29,6 +29,9 @@ struct ShapePriorOptions {
   int max_evaluations = 6000;        // Nelder–Mead cost evaluations
   int refine_pixels = 6000;          // the refinement's cost uses at most this many pixels (evenly spread)
   double min_prior_fraction = 0.05;  // of the mask's pixels with a prior normal, or fail
+  // Refinement cost evaluations done (solve_result.hpp; up to max_evaluations,
+  // fewer when it converges); not part of to_json().
+  SolveProgress progress;
 
   void check() const;  // throws InputError naming the field and value
   nlohmann::json to_json() const;

@@ -6,9 +6,16 @@
 #include <opencv2/core.hpp>
 
 #include <cstddef>
+#include <functional>
 #include <string>
 
 namespace lightstage {
+
+// Optional progress report of a solver: called with the number of items (pixels,
+// or cost evaluations for shape-prior) it has just finished, from worker threads
+// and in batches, so it must be thread-safe and cheap (e.g. Progress::advance).
+// Empty = no report.
+using SolveProgress = std::function<void(std::size_t items)>;
 
 struct SolveSummary {
   std::string method;              // e.g. "l2"

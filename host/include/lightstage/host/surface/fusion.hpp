@@ -33,6 +33,6 @@ struct FusionOptions {
 // mismatched sizes or types, or when no pixel has a prior.
 SurfaceResult fuse_depth_normals(const cv::Mat& prior, const cv::Mat& prior_valid, const cv::Mat& normals,
                                  const cv::Mat& mask, const CameraModel& camera,
-                                 const FusionOptions& options = {});
+                                 const FusionOptions& options = {}, const SurfaceProgress& progress = {});
 
 }  // namespace lightstage::surface

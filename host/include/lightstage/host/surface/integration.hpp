@@ -22,6 +22,8 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
+#include <functional>
+
 namespace lightstage::surface {
 
 enum class IntegrationMethod { kPoisson, kFrankotChellappa };
@@ -70,10 +72,16 @@ struct SurfaceResult {
   SurfaceStats stats;
 };
 
+// Optional progress report: the share of the work done, in [0, 1], never
+// decreasing, ending at 1. For the iterative solves it is the share of the
+// residual reduction achieved (log scale) in each reweighting round. Called on
+// the caller's thread.
+using SurfaceProgress = std::function<void(double fraction)>;
+
 // Integrates `normals` (CV_32FC3 x y z, unit; zero = no normal) inside `mask`
 // (CV_8UC1, nonzero = inside; empty = everywhere). Throws InputError for
 // mismatched sizes or types.
 SurfaceResult integrate_normals(const cv::Mat& normals, const cv::Mat& mask, const CameraModel& camera,
-                                const IntegrationOptions& options = {});
+                                const IntegrationOptions& options = {}, const SurfaceProgress& progress = {});
 
 }  // namespace lightstage::surface

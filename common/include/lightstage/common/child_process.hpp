@@ -1,7 +1,7 @@
 #pragma once
-// A program of the build running beside the test (lightstage-sim,
-// lightstage-domed, lightstage), for integration tests across processes. Its
-// standard output and error go to one log file that the test can wait on.
+// Another program running beside this one (lightstage-sim and lightstage-domed
+// under `lightstage demo`, any of our programs in integration tests). Its
+// standard output and error go to one log file that the parent can wait on.
 
 #include <chrono>
 #include <filesystem>
@@ -11,11 +11,11 @@
 
 #include <sys/types.h>
 
-namespace lightstage::testing {
+namespace lightstage {
 
 class ChildProcess {
  public:
-  // Starts `program` with `args`; output goes to `log`.
+  // Starts `program` with `args`; output goes to `log`. Throws Error when it cannot start.
   ChildProcess(const std::filesystem::path& program, const std::vector<std::string>& args,
                std::filesystem::path log);
   // Kills (SIGKILL) and reaps the child if it still runs.
@@ -28,8 +28,11 @@ class ChildProcess {
   void signal(int signal_number) const;
   // The exit code (128 + signal when killed by one), or nullopt if still running after `timeout`.
   std::optional<int> wait(std::chrono::milliseconds timeout);
+  // SIGTERM, then SIGKILL when it has not exited within `grace`; returns the exit code.
+  int terminate(std::chrono::milliseconds grace);
   bool running();
   std::string output() const;
+  const std::filesystem::path& log() const { return log_; }
   pid_t pid() const { return pid_; }
 
  private:
@@ -38,4 +41,8 @@ class ChildProcess {
   std::filesystem::path log_;
 };
 
-}  // namespace lightstage::testing
+// The folder of the running executable (/proc/self/exe), where the project's
+// programs sit side by side in a build or an install.
+std::filesystem::path own_program_dir();
+
+}  // namespace lightstage

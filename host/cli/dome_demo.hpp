@@ -1,0 +1,47 @@
+#pragma once
+// `lightstage demo`: the real pipeline on the simulated dome. lightstage-sim
+// (virtual gpiochip and camera) and lightstage-domed (the firmware) run as
+// their own processes; this process captures through the protocol and the
+// sim: camera exactly as on a rig — a chrome sphere at two positions for the
+// light calibration, then the object — calibrates, solves with the
+// calibrated (near) lights, integrates a surface and writes the report.
+
+#include "lightstage/host/capture/capture_session.hpp"
+#include "lightstage/host/progress.hpp"
+#include "steps.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace lightstage::cli {
+
+struct DomeDemoOptions {
+  std::filesystem::path rig;
+  std::filesystem::path out;
+  std::filesystem::path programs;  // folder of lightstage-sim and lightstage-domed; empty = beside us
+  // The object: what lightstage-sim's camera renders (the ground truth comes from the same world).
+  std::string scene = "bunny";
+  std::string material;  // empty = the scene's
+  std::optional<int> width, height;
+  std::string noise = "physical";  // none | physical
+  std::uint64_t seed = 1;
+  // Two chrome-sphere positions (dome frame, mm) and radius for the calibration: a
+  // large sphere, far apart, as docs/calibration.md recommends for LED positions.
+  double sphere_radius_mm = 25;
+  std::vector<double> sphere_x_mm = {-25, 25};
+  CaptureOptions capture;  // exposure, darks, loop; `out` and `mode` are set per stage
+  SolverFunction solver;   // default: Lambertian least squares with a shadow threshold
+  std::string method_name = "l2";
+  OutputMode mode = OutputMode::kHuman;
+};
+
+// Runs every stage; the children are stopped on every exit path (also when a
+// stage throws). Returns the summary also written to OUT/demo.json.
+nlohmann::json run_dome_demo(const DomeDemoOptions& options);
+
+}  // namespace lightstage::cli
