@@ -106,7 +106,7 @@ class DomeDemo {
     calibrate(chrome_stacks, calibration_dir);
 
     // 3. The object, with the capture's exposure choice (automatic by default).
-    const fs::path stack = o_.out / "stack";
+    const fs::path stack = o_.out / "capture";
     capture_stage({"object", o_.scene, o_.material, stack, false});
     write_ground_truth(stack);
 

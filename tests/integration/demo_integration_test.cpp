@@ -70,9 +70,9 @@ TEST(DemoIntegration, CalibratesCapturesSolvesAndReportsThroughThreeProcesses) {
   EXPECT_LT(mean_error, 1.5) << summary.dump();
 
   for (const fs::path& file :
-       {fs::path("calibration/calibration.json"), fs::path("stack/Normal_gt.png"),
-        fs::path("result/normal.png"), fs::path("result/report.html"), fs::path("surface/depth.pfm"),
-        fs::path("surface/mesh.ply"), fs::path("demo.json")}) {
+       {fs::path("calibration/calibration.json"), fs::path("capture/Normal_gt.png"),
+        fs::path("capture/mask.png"), fs::path("result/normal.png"), fs::path("result/report.html"),
+        fs::path("surface/depth.pfm"), fs::path("surface/mesh.ply"), fs::path("demo.json")}) {
     EXPECT_TRUE(fs::exists(out / file)) << file;
   }
   std::ifstream page(out / "result/report.html");

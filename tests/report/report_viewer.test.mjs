@@ -210,3 +210,25 @@ test('the report of a bi-polynomial solve relights with the fitted model', async
   const meta = await checkReport(context, path.join(result, 'report.html'), result, dir);
   assert.deepEqual(meta.model, { kind: 'bipolynomial', order: 2 });
 });
+
+// The README links the demo's report: the real pipeline (three processes,
+// calibration, capture, near-light solve, surface) must give a page that opens
+// cleanly with the depth relief and the calibrated lights. Its screenshot is
+// SCRATCH/demo/screenshot.png.
+test('the demo report shows the calibrated lights and the integrated surface', async (t) => {
+  const dir = path.join(scratch, 'demo');
+  fs.rmSync(dir, { recursive: true, force: true });
+  fs.mkdirSync(dir, { recursive: true });
+  const out = path.join(dir, 'run');
+  const summary = JSON.parse(lightstage(['demo', '--width', '128', '--height', '128', '--out', out, '--json']));
+  assert.ok(summary.solve.error_vs_ground_truth.mean_deg < 2, `demo error ${summary.solve.error_vs_ground_truth.mean_deg}`);
+  const result = path.join(out, 'result');
+  const page = path.join(result, 'report.html');
+  assert.equal(summary.report, page);
+  const html = fs.readFileSync(page, 'utf8');
+  assert.ok(html.includes('alt="depth"'), 'the demo report shows the integrated depth');
+  assert.ok(html.includes('calibrated'), 'the demo report plots the calibrated lights');
+  const context = await launch(t);
+  const meta = await checkReport(context, page, result, dir);
+  assert.equal(meta.model.kind, 'lambertian');
+});
