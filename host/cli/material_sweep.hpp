@@ -24,9 +24,11 @@ struct MaterialSweepOptions {
   std::vector<std::string> materials;  // sim material presets; empty = default_sweep_materials()
   std::vector<std::string> methods;    // solve methods + "lambert-low"; empty = default_sweep_methods()
   std::vector<int> light_counts = {100};
-  std::vector<double> noise = {-1, 0, 0.05, 0.15, 0.3};         // λ; −1 = no noise, no quantisation
-  double t_low = 0.25;                                          // bi-polynomial, auto and lambert-low
-  std::string azimuth_from = "isotropy";                        // monotonic's --azimuth-from
+  std::vector<double> noise = {-1, 0, 0.05, 0.15, 0.3};  // λ; −1 = no noise, no quantisation
+  double t_low = 0.25;                                   // bi-polynomial, auto and lambert-low
+  // monotonic's --azimuth-from: a robust Lambertian normal's azimuth (sweep mean 2.03° noise-free
+  // against 3.34° from isotropy, whose ring interpolation of 100 random lights is ~2° off even on Lambert).
+  std::string azimuth_from = "robust";
   double refine_step_deg = MonotonicOptions{}.refine_step_deg;  // monotonic's 2-D refinement (0 = off)
   double auto_agreement_deg = AutoOptions{}.agreement_deg;
   double auto_margin = AutoOptions{}.monotonic_margin;

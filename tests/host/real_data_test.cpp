@@ -6,7 +6,11 @@
 #include "lightstage/host/io/solve_output.hpp"
 #include "lightstage/host/io/stack_io.hpp"
 #include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/solvers/auto.hpp"
+#include "lightstage/host/solvers/bipolynomial.hpp"
 #include "lightstage/host/solvers/lambertian.hpp"
+#include "lightstage/host/solvers/monotonic.hpp"
+#include "lightstage/host/solvers/robust.hpp"
 #include "lightstage/testing/paths.hpp"
 
 #include <fmt/format.h>
@@ -82,6 +86,71 @@ TEST(HostRealData, DiligentBallReproducesTheLeastSquaresBaseline) {
   const auto reread = evaluate_normal_map(out / "normal.png", ball);
   EXPECT_NEAR(reread.mean, error.mean, 0.002);
   EXPECT_EQ(reread.count, 15791u);
+}
+
+// Issue 6 on real data: the general-reflectance methods with the
+// dissertation's real-data shadow threshold (0.02), on every fourth mask pixel
+// of the ball (a checkerboard-like subset, ~3,950 pixels, spread over the whole
+// ball: the error depends on the distance from the centre). Published on the
+// whole ball: ST14 (bi-polynomial) 1.74, learned methods 1.24–1.5. Measured
+// (whole ball): robust 2.09, biquadratic 2.21, auto 2.16 — the error is a
+// radial bias (normals ~2.5° too far from the viewer at 30–60° from it): the
+// ball's reflectance falls below Lambert's at grazing incidence (0.94 of the
+// near-normal ratio at 60–70°, 0.87 at 70–80°), exactly the observations T_low
+// keeps, and with lights in a 43° cone the bi-polynomial cannot tell that
+// fall-off from a tilt (its full minimum of Eq. 3.16 is 6.5° off). The bounds
+// pin today's numbers; the 1.74 target is open.
+TEST(HostRealData, DiligentBallGeneralReflectanceMethods) {
+  const auto ball = data_dir("diligent/ballPNG");
+  if (ball.empty()) GTEST_SKIP() << "shared data not found";
+  const auto start = std::chrono::steady_clock::now();
+  ImageStack stack = io::load_stack(ball);
+  ASSERT_TRUE(stack.ground_truth.has_value());
+  for (int y = 0; y < stack.mask.rows; ++y) {
+    for (int x = 0; x < stack.mask.cols; ++x) {
+      if ((x + 2 * y) % 4 != 0) stack.mask.at<std::uint8_t>(y, x) = 0;
+    }
+  }
+  const int subset = cv::countNonZero(stack.mask);
+  EXPECT_GT(subset, 3700);
+  EXPECT_LT(subset, 4200);
+  const Observations obs = make_observations(stack);
+  auto mean_error = [&](const SolveResult& result) {
+    const auto stats = angular_error(result.normals, stack.ground_truth->normals, stack.mask).stats;
+    EXPECT_EQ(stats.missing, 0u) << result.summary.message;
+    return stats;
+  };
+  constexpr double kShadow = 0.02;
+  RobustOptions robust;
+  robust.shadow_threshold = kShadow;
+  robust.threads = 2;
+  BiPolynomialOptions biquadratic;
+  biquadratic.shadow_threshold = kShadow;
+  biquadratic.threads = 2;
+  AutoOptions automatic;
+  automatic.bipolynomial.shadow_threshold = automatic.monotonic.shadow_threshold = kShadow;
+  automatic.threads = 2;
+  const auto e_robust = mean_error(solve_robust(obs, robust));
+  const auto e_biquadratic = mean_error(solve_bipolynomial(obs, biquadratic));
+  const auto e_auto = mean_error(solve_auto(obs, automatic));
+  // Monotonic is reported, not bounded: DiLiGenT's lights span 43° from the
+  // view axis, and Algorithm 1's uniqueness needs the hemisphere (≈10° here).
+  MonotonicOptions monotonic;
+  monotonic.shadow_threshold = kShadow;
+  monotonic.threads = 2;
+  const cv::Mat azimuth = solve_robust(obs, robust).normals;
+  const auto e_monotonic = mean_error(solve_monotonic(obs, monotonic, azimuth));
+  std::cout << fmt::format(
+      "ballPNG subset ({} px), mean / median deg: robust {:.3f} / {:.3f}, biquadratic {:.3f} / {:.3f}, auto "
+      "{:.3f} / {:.3f}, monotonic (robust azimuth) {:.3f} / {:.3f} (ST14 published 1.74); {:.1f} s\n",
+      subset, e_robust.mean, e_robust.median, e_biquadratic.mean, e_biquadratic.median, e_auto.mean,
+      e_auto.median, e_monotonic.mean, e_monotonic.median,
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  EXPECT_LT(e_robust.mean, 2.2);
+  EXPECT_LT(std::min(e_biquadratic.mean, e_auto.mean), 2.3);
+  EXPECT_LT(e_auto.mean, 2.3);
+  // Monotonic: a loose bound (8.7 measured), only so that a breakage shows.
+  EXPECT_LT(e_monotonic.mean, 15.0);
 }
 
 TEST(HostRealData, UwCatLoadsAndSolves) {

@@ -110,12 +110,21 @@ double monotonicity_cost(const Eigen::Vector3d& n, const MonotonicOptions& optio
     }
     order[at] = current;
   }
+  // Discrete derivatives over gaps narrower than the mean spacing of x' are
+  // mostly quantisation and noise (and, where two lights nearly tie in n'·h,
+  // unbounded): the gap is floored at the mean spacing. Chosen on the material
+  // sweep (noise-free 2.03° -> 1.66°, λ = 0.05 4.75° -> 3.67°, azimuth from robust).
+  const double mean_spacing =
+      m > 1 ? (ws.x[static_cast<std::size_t>(order[m - 1])] - ws.x[static_cast<std::size_t>(order[0])]) /
+                  static_cast<double>(m - 1)
+            : 0.0;
+  const double min_gap = std::max(mean_spacing, 1e-12);
   double cost = 0;
   for (std::size_t k = 1; k < m; ++k) {
     const auto a = static_cast<std::size_t>(order[k - 1]), b = static_cast<std::size_t>(order[k]);
     const double dy = ws.y[b] - ws.y[a];
     if (dy >= 0) continue;
-    cost += -dy / std::max(ws.x[b] - ws.x[a], 1e-12);
+    cost += -dy / std::max(ws.x[b] - ws.x[a], min_gap);
   }
   return cost;
 }
