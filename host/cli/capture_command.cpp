@@ -31,7 +31,9 @@ void add_capture(CLI::App& app) {
       "Frames are matched to LEDs by trigger time, dropped frames are retaken, and every frame is\n"
       "written as it lands: DIR is a loadable stack (DiLiGenT layout + manifest.json) at every\n"
       "moment, and --resume completes an interrupted capture. Exposure is fixed (--exposure-us N)\n"
-      "or chosen per LED from a preview pass (auto); dark frames per exposure give the black level.\n"
+      "or chosen per LED from a preview pass (auto); dark frames per exposure are subtracted pixel by "
+      "pixel.\n"
+      "--bracket takes every LED at several exposures and merges them into one HDR frame (float PFM).\n"
       "Example: lightstage capture --controller unix:/run/lightstage/domed.sock --camera v4l2:/dev/video0 "
       "--out scans/coin");
   sub->add_option("--rig", args->rig, "rig description (YAML)")->capture_default_str();
@@ -55,6 +57,10 @@ void add_capture(CLI::App& app) {
   sub->add_option("--settle-us", args->options.settle_us, "LED on to trigger")->capture_default_str();
   sub->add_option("--gap-us", args->options.gap_us, "dark time between frames")->capture_default_str();
   sub->add_option("--leds", args->leds, "LED ids to capture, in order (default: all)")->delimiter(',');
+  sub->add_option("--bracket", args->options.bracket_stops,
+                  "HDR: stops relative to each LED's exposure, e.g. 0,-3,-6; the frames of each LED are "
+                  "merged into one float PFM frame per exposure-second (docs/capture.md)")
+      ->delimiter(',');
   sub->add_option(
       "--response", args->options.response,
       "the camera's inverse response (lightstage camera response): frames are linearised to float PFM");

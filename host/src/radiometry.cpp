@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 
 namespace lightstage {
 namespace {
@@ -21,14 +22,16 @@ double default_saturation(int depth) {
 // What one frame's conversion needs, worked out once per frame.
 struct FrameConstants {
   const cv::Mat* image = nullptr;
+  const cv::Mat* dark = nullptr;  // CV_32F, the image's channels; null = subtract `black`
   double scale = 1, saturation = 0, black = 0;
   Vec3 intensity = Vec3::Ones();  // r, g, b
   double grey_intensity = 1;
 };
 
-FrameConstants frame_constants(const Frame& frame) {
+FrameConstants frame_constants(const Frame& frame, const cv::Mat* dark) {
   FrameConstants k;
   k.image = &frame.image;
+  k.dark = dark;
   k.scale = full_scale(frame.image.depth());
   k.saturation =
       frame.saturation_level > 0 ? frame.saturation_level : default_saturation(frame.image.depth());
@@ -47,9 +50,17 @@ void convert_frame(const FrameConstants& k, const std::vector<cv::Point>& pixels
                    std::size_t end, bool clamp_to_one, Eigen::Index column, ObservationMatrix& values,
                    FlagMatrix& saturated) {
   const cv::Mat& image = *k.image;
-  const double scale = k.scale, saturation = k.saturation, black = k.black;
+  const double scale = k.scale, saturation = k.saturation;
+  constexpr int kChannels = kColour ? 3 : 1;
+  const double scalar_black[3] = {k.black, k.black, k.black};
   for (std::size_t p = begin; p < end; ++p) {
-    const T* px = image.ptr<T>(pixels[p].y) + pixels[p].x * (kColour ? 3 : 1);
+    const T* px = image.ptr<T>(pixels[p].y) + pixels[p].x * kChannels;
+    // The dark frame's pixel, or the scalar black level in every channel.
+    double black[3] = {scalar_black[0], scalar_black[1], scalar_black[2]};
+    if (k.dark != nullptr) {
+      const float* d = k.dark->ptr<float>(pixels[p].y) + pixels[p].x * kChannels;
+      for (int c = 0; c < kChannels; ++c) black[c] = static_cast<double>(d[c]);
+    }
     double value = 0;
     bool clipped = false;
     if constexpr (kColour) {
@@ -57,13 +68,13 @@ void convert_frame(const FrameConstants& k, const std::vector<cv::Point>& pixels
       const double b = static_cast<double>(px[0]), g = static_cast<double>(px[1]),
                    r = static_cast<double>(px[2]);
       clipped = b >= saturation || g >= saturation || r >= saturation;
-      value = kRed * ((r - black) / scale / k.intensity.x()) +
-              kGreen * ((g - black) / scale / k.intensity.y()) +
-              kBlue * ((b - black) / scale / k.intensity.z());
+      value = kRed * ((r - black[2]) / scale / k.intensity.x()) +
+              kGreen * ((g - black[1]) / scale / k.intensity.y()) +
+              kBlue * ((b - black[0]) / scale / k.intensity.z());
     } else {
       const double v = static_cast<double>(px[0]);
       clipped = v >= saturation;
-      value = (v - black) / scale / k.grey_intensity;
+      value = (v - black[0]) / scale / k.grey_intensity;
     }
     if (clamp_to_one) value = std::min(value, 1.0);
     const auto row = static_cast<Eigen::Index>(p);
@@ -124,6 +135,13 @@ Observations make_observations(const ImageStack& stack, const RadiometryOptions&
     if (!(frame.light_intensity.array() > 0).all()) {
       fail("radiometry: frame {} ({}): light intensity must be positive", i, frame.filename);
     }
+    if (!frame.dark.empty() &&
+        (frame.dark.size() != first.size() || frame.dark.channels() != first.channels() ||
+         (frame.dark.depth() != CV_8U && frame.dark.depth() != CV_16U && frame.dark.depth() != CV_32F))) {
+      fail("radiometry: frame {} ({}): dark frame {} is type {} of {}x{}, the images are type {} of {}x{}", i,
+           frame.filename, frame.dark_file, frame.dark.type(), frame.dark.cols, frame.dark.rows, first.type(),
+           first.cols, first.rows);
+    }
   }
   if (!stack.mask.empty() && (stack.mask.type() != CV_8UC1 || stack.mask.size() != first.size())) {
     fail("radiometry: mask must be CV_8UC1 of {}x{}, got type {} of {}x{}", first.cols, first.rows,
@@ -151,9 +169,16 @@ Observations make_observations(const ImageStack& stack, const RadiometryOptions&
   for (Eigen::Index j = 0; j < images; ++j) {
     obs.lights.row(j) = stack.frames[static_cast<std::size_t>(j)].light_direction.normalized().transpose();
   }
+  // Dark frames as float, converted once each (frames of one exposure share one).
+  std::map<const void*, cv::Mat> darks;
+  for (const Frame& frame : stack.frames) {
+    if (frame.dark.empty() || darks.count(frame.dark.data)) continue;
+    frame.dark.convertTo(darks[frame.dark.data], CV_MAKETYPE(CV_32F, frame.dark.channels()));
+  }
   std::vector<FrameConstants> frames;
   frames.reserve(stack.frames.size());
-  for (const Frame& frame : stack.frames) frames.push_back(frame_constants(frame));
+  for (const Frame& frame : stack.frames)
+    frames.push_back(frame_constants(frame, frame.dark.empty() ? nullptr : &darks.at(frame.dark.data)));
   const bool colour = first.channels() == 3;
   util::parallel_chunks(
       obs.pixels.size(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {

@@ -166,5 +166,27 @@ TEST_F(HostBrokenStack, ManifestOfAnotherFormat) {
   EXPECT_THAT(load_error(), HasSubstr("manifest.json: format"));
 }
 
+TEST_F(HostBrokenStack, ManifestDarkMissing) {
+  write("manifest.json", R"({"frames": [{}, {"dark": "dark_500us.png"}, {}, {}]})");
+  EXPECT_THAT(load_error(), HasSubstr("manifest.json: frames[1].dark: 'dark_500us.png' is not in the stack"));
+}
+
+TEST_F(HostBrokenStack, ManifestDarkOfWrongType) {
+  write("manifest.json", R"({"frames": [{}, {}, {"dark": 500}, {}]})");
+  EXPECT_THAT(load_error(), HasSubstr("manifest.json: frames[2].dark: expected a file name"));
+}
+
+TEST_F(HostBrokenStack, ManifestDarkOutsideTheFolder) {
+  write("manifest.json", R"({"frames": [{"dark": "../dark.png"}, {}, {}, {}]})");
+  EXPECT_THAT(load_error(),
+              HasSubstr("manifest.json: frames[0].dark: '../dark.png' must name a file inside"));
+}
+
+TEST_F(HostBrokenStack, ManifestDarkOfAnotherSize) {
+  ASSERT_TRUE(cv::imwrite((dir_ / "dark.png").string(), cv::Mat(3, 3, CV_16UC3, cv::Scalar::all(300))));
+  write("manifest.json", R"({"frames": [{}, {}, {}, {"dark": "dark.png"}]})");
+  EXPECT_THAT(load_error(), HasSubstr("dark.png: dark frame is 3x3"));
+}
+
 }  // namespace
 }  // namespace lightstage

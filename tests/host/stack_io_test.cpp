@@ -115,5 +115,60 @@ TEST(HostStackIo, LoadsDiligentLayoutWithoutManifest) {
   EXPECT_EQ(loaded.frames[0].light_intensity, Vec3::Ones());
 }
 
+// Per-pixel darks: each frame names its exposure's dark; the file is written
+// once, read once and shared by the frames naming it.
+TEST(HostStackIo, DarkFramesRoundTripSharedByTheirFrames) {
+  const auto dir = testing::scratch_dir() / "stack";
+  ImageStack stack = testing::small_stack(4);
+  cv::Mat dark_a(stack.frames[0].image.size(), CV_16UC3), dark_b(stack.frames[0].image.size(), CV_16UC3);
+  cv::RNG rng(7);
+  rng.fill(dark_a, cv::RNG::UNIFORM, 0, 4000);
+  rng.fill(dark_b, cv::RNG::UNIFORM, 0, 4000);
+  for (std::size_t i = 0; i < stack.frames.size(); ++i) {
+    stack.frames[i].dark = i < 3 ? dark_a : dark_b;
+    stack.frames[i].dark_file = i < 3 ? "dark_1000us.png" : "dark_2000us.png";
+  }
+  io::write_stack(dir, stack);
+  ASSERT_TRUE(std::filesystem::exists(dir / "dark_1000us.png"));
+  ASSERT_TRUE(std::filesystem::exists(dir / "dark_2000us.png"));
+  const auto manifest = read_json(dir / "manifest.json");
+  EXPECT_EQ(manifest["frames"][0]["dark"], "dark_1000us.png");
+  EXPECT_EQ(manifest["frames"][3]["dark"], "dark_2000us.png");
+
+  const ImageStack loaded = io::load_stack(dir);
+  EXPECT_EQ(loaded.frames[1].dark_file, "dark_1000us.png");
+  ASSERT_EQ(loaded.frames[1].dark.type(), CV_16UC3);
+  EXPECT_EQ(cv::norm(loaded.frames[1].dark, dark_a, cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(loaded.frames[3].dark, dark_b, cv::NORM_INF), 0);
+  EXPECT_EQ(loaded.frames[0].dark.data, loaded.frames[2].dark.data) << "one exposure's dark is read once";
+  EXPECT_NE(loaded.frames[0].dark.data, loaded.frames[3].dark.data);
+}
+
+// Stacks written before darks were named (and DiLiGenT, simulated stacks)
+// load without one: radiometry falls back to the scalar black level.
+TEST(HostStackIo, ManifestsWithoutDarksLoadWithTheScalarBlackLevel) {
+  const auto dir = testing::scratch_dir();
+  io::write_stack(dir, testing::small_stack(3));
+  const auto manifest = read_json(dir / "manifest.json");
+  EXPECT_FALSE(manifest["frames"][0].contains("dark"));
+  const ImageStack loaded = io::load_stack(dir);
+  EXPECT_TRUE(loaded.frames[0].dark.empty());
+  EXPECT_TRUE(loaded.frames[0].dark_file.empty());
+  EXPECT_EQ(loaded.frames[0].black_level, 64);
+}
+
+TEST(HostStackIo, ADarkWithoutAFileNameOrOfAnotherSizeIsRefusedBeforeWriting) {
+  const auto dir = testing::scratch_dir() / "out";
+  ImageStack stack = testing::small_stack(3);
+  stack.frames[1].dark = cv::Mat(stack.frames[1].image.size(), CV_16UC3, cv::Scalar::all(10));
+  EXPECT_THROW(io::write_stack(dir, stack), InputError);
+  stack.frames[1].dark_file = "dark.png";
+  stack.frames[1].dark = cv::Mat(2, 2, CV_16UC3, cv::Scalar::all(10));
+  EXPECT_THROW(io::write_stack(dir, stack), InputError);
+  stack.frames[1].dark = cv::Mat(stack.frames[1].image.size(), CV_32FC3, cv::Scalar::all(10));
+  EXPECT_THROW(io::write_stack(dir, stack), InputError) << "a float dark must be .pfm";
+  EXPECT_FALSE(std::filesystem::exists(dir));
+}
+
 }  // namespace
 }  // namespace lightstage

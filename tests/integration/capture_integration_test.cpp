@@ -4,6 +4,7 @@
 
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/stack_io.hpp"
+#include "lightstage/host/radiometry.hpp"
 #include "lightstage/testing/paths.hpp"
 #include "lightstage/testing/run.hpp"
 
@@ -42,13 +43,14 @@ std::vector<std::string> capture_args(const SimulatedDome& dome, const fs::path&
           "--quiet"};
 }
 
-std::size_t frames_on_disk(const fs::path& dir) {
+std::size_t frames_on_disk(const fs::path& dir, const std::string& extension = ".png") {
   std::size_t n = 0;
   if (!fs::exists(dir)) return 0;
   for (const auto& e : fs::directory_iterator(dir)) {
     const std::string name = e.path().filename().string();
-    const bool numbered_frame = name.size() == 7 && name.ends_with(".png") &&
-                                std::all_of(name.begin(), name.begin() + 3, [](unsigned char c) { return std::isdigit(c); });
+    const bool numbered_frame =
+        name.size() == 7 && name.ends_with(extension) &&
+        std::all_of(name.begin(), name.begin() + 3, [](unsigned char c) { return std::isdigit(c); });
     if (numbered_frame) ++n;
   }
   return n;
@@ -209,6 +211,170 @@ TEST(CaptureIntegration, ANonlinearCameraIsLinearAfterResponseCalibration) {
   const double deviation = nlohmann::json::parse(after.out).at("max_deviation").get<double>();
   EXPECT_LT(deviation, 0.01) << after.out;
   RecordProperty("linearity_after_calibration", std::to_string(deviation));
+}
+
+// A shiny sphere: its highlights are ~200 times the diffuse shading.
+const std::vector<std::string> kShinyScene = {
+    "--scene",       "shiny-sphere", "--material", "blinn-phong:shininess=200,ks=0.8",
+    "--lights",      "distant",      "--width",    "64",
+    "--height",      "64",           "--noise",    "none",
+    "--black-level", "512"};
+
+nlohmann::json read_manifest(const fs::path& stack) {
+  std::ifstream in(stack / "manifest.json");
+  return nlohmann::json::parse(in);
+}
+
+// Every LED bracketed at 16, 4 and 1 ms: 16 ms clips the highlights, 1 ms
+// still clips their peaks. The merge must be linear — equal to a single
+// capture divided by its exposure wherever that capture is well inside its
+// range, highlights clipped at 16 ms included — and must flag the peaks.
+TEST(CaptureIntegration, HdrBracketsMergeLinearlyAndFlagPixelsClippedAtEveryExposure) {
+  SimulatedDome dome({{}, kShinyScene, {}, true});
+  const std::string leds = "0,30,41,60,90";
+  const auto capture = [&](const fs::path& out, const std::string& exposure, std::vector<std::string> more) {
+    std::vector<std::string> args = capture_args(dome, out);
+    args[10] = exposure;  // --exposure-us
+    args.insert(args.end(), {"--leds", leds, "--json"});
+    args.insert(args.end(), more.begin(), more.end());
+    const RunResult run = run_lightstage(args);
+    EXPECT_EQ(run.exit_code, 0) << run.err << dome.logs();
+    return run.exit_code == 0 ? nlohmann::json::parse(run.out) : nlohmann::json();
+  };
+  const auto hdr = scratch_dir() / "hdr";
+  const auto report = capture(hdr, "16000", {"--bracket", "0,-2,-4"});
+  ASSERT_FALSE(report.is_null());
+  EXPECT_EQ(report.at("frames").get<int>(), 5);
+  EXPECT_EQ(report.at("bracket_frames").get<int>(), 15);
+  // References: single noise-free captures, one short (the highlights in
+  // range) and one as long as the bracket's longest (the diffuse well exposed).
+  const auto short_ref = scratch_dir() / "short", long_ref = scratch_dir() / "long";
+  ASSERT_FALSE(capture(short_ref, "250", {}).is_null());
+  ASSERT_FALSE(capture(long_ref, "16000", {}).is_null());
+
+  const ImageStack merged = io::load_stack(hdr), a = io::load_stack(short_ref), b = io::load_stack(long_ref);
+  ASSERT_EQ(merged.frames.size(), 5u);
+  const auto manifest = read_manifest(hdr);
+  EXPECT_EQ(manifest.at("capture").at("bracket_stops"), nlohmann::json({0.0, -2.0, -4.0}));
+  const double clip = 0.98 * 65535;
+  std::size_t compared = 0, rescued = 0, flagged = 0;
+  double worst = 0, sum = 0;
+  for (std::size_t i = 0; i < merged.frames.size(); ++i) {
+    const Frame& m = merged.frames[i];
+    ASSERT_EQ(m.image.type(), CV_32FC1) << m.filename;
+    EXPECT_EQ(m.filename, fmt::format("{:03}.pfm", i + 1));
+    EXPECT_TRUE(m.dark.empty()) << "merged frames are dark-subtracted already";
+    EXPECT_EQ(m.exposure_us, 1e6);
+    EXPECT_FLOAT_EQ(static_cast<float>(m.saturation_level), static_cast<float>(1 / 1000e-6));
+    const auto& entry = manifest.at("frames").at(i);
+    EXPECT_EQ(entry.at("bracket_exposures_us"), nlohmann::json({1000.0, 4000.0, 16000.0}));
+    EXPECT_GT(entry.at("bracket").at(2).at("clipped_values").get<int>(), 0)
+        << "16 ms must clip the highlight";
+    // Single captures name their exposure's dark, subtracted pixel by pixel.
+    ASSERT_EQ(a.frames[i].dark_file, "dark_250us.png");
+    ASSERT_FALSE(a.frames[i].dark.empty());
+    for (int y = 0; y < m.image.rows; ++y) {
+      for (int x = 0; x < m.image.cols; ++x) {
+        const double value = m.image.at<float>(y, x);
+        const double short_dn =
+            a.frames[i].image.at<std::uint16_t>(y, x) - a.frames[i].dark.at<std::uint16_t>(y, x);
+        const double long_raw = b.frames[i].image.at<std::uint16_t>(y, x);
+        const double long_dn = long_raw - b.frames[i].dark.at<std::uint16_t>(y, x);
+        // What the shortest bracket exposure (1 ms) recorded, predicted from the 250 us reference.
+        const double at_shortest = 512 + short_dn * 4;
+        if (value >= m.saturation_level) {
+          ++flagged;
+          EXPECT_GT(at_shortest, 0.97 * 65535)
+              << "flagged but in range at 1 ms: " << i << " " << x << "," << y;
+          continue;
+        }
+        EXPECT_LT(at_shortest, 0.99 * 65535)
+            << "clipped at every exposure but not flagged: " << x << "," << y;
+        double reference = 0;
+        if (long_raw < clip && long_dn >= 200) {
+          reference = long_dn / 65535 / 16000e-6;
+        } else if (short_dn >= 200) {
+          reference = short_dn / 65535 / 250e-6;
+          if (long_raw >= clip) ++rescued;
+        } else {
+          continue;
+        }
+        const double error = std::abs(value / reference - 1);
+        worst = std::max(worst, error);
+        sum += error;
+        ++compared;
+      }
+    }
+  }
+  ASSERT_GT(compared, 1000u);
+  EXPECT_GT(rescued, 20u) << "highlights clipped at 16 ms, in range after the merge";
+  EXPECT_GT(flagged, 5u) << "peaks clipped even at 1 ms";
+  EXPECT_LT(worst, 0.02);
+  RecordProperty("hdr_worst_relative_error", std::to_string(worst));
+  RecordProperty("hdr_mean_relative_error", std::to_string(sum / static_cast<double>(compared)));
+  RecordProperty("hdr_pixels_compared", std::to_string(compared));
+  RecordProperty("hdr_highlight_pixels_rescued", std::to_string(rescued));
+  RecordProperty("hdr_pixels_flagged", std::to_string(flagged));
+
+  // The flags reach the solvers: radiometry marks exactly those observations saturated.
+  const Observations obs = make_observations(merged);
+  std::size_t saturated = 0;
+  for (Eigen::Index p = 0; p < obs.saturated.rows(); ++p) {
+    for (Eigen::Index j = 0; j < obs.saturated.cols(); ++j) saturated += obs.saturated(p, j) ? 1 : 0;
+  }
+  EXPECT_EQ(saturated, flagged);
+}
+
+// An interrupted HDR capture keeps its merged frames; --resume takes only the
+// LEDs not merged yet and ends with the stack an uninterrupted run gives.
+TEST(CaptureIntegration, KilledHdrCaptureResumesWithoutRetakingFinishedLeds) {
+  SimulatedDome dome({{}, kScene, {}, true});
+  std::string leds;
+  for (int i = 0; i < 36; ++i) leds += (i ? "," : "") + std::to_string(i);
+  const auto args = [&](const fs::path& out) {
+    std::vector<std::string> a = capture_args(dome, out);
+    a.insert(a.end(), {"--leds", leds, "--bracket", "0,-2"});
+    return a;
+  };
+  const auto whole = scratch_dir() / "whole";
+  ASSERT_EQ(run_lightstage(args(whole)).exit_code, 0) << dome.logs();
+
+  const auto cut = scratch_dir() / "cut";
+  {
+    ChildProcess host(bin_dir() / "lightstage", args(cut), scratch_dir() / "host.log");
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (frames_on_disk(cut, ".pfm") < 12 && std::chrono::steady_clock::now() < deadline &&
+           host.running()) {
+      std::this_thread::sleep_for(milliseconds(5));
+    }
+    host.signal(SIGKILL);
+    host.wait(std::chrono::seconds(5));
+  }
+  const std::size_t kept = frames_on_disk(cut, ".pfm");
+  ASSERT_GE(kept, 12u);
+  ASSERT_LT(kept, 36u) << "the capture finished before it could be interrupted";
+  const std::size_t done = read_manifest(cut).at("capture").at("done").size();
+  EXPECT_GE(done, kept - 1);
+
+  std::vector<std::string> resume = args(cut);
+  resume.insert(resume.end(), {"--resume", "--json"});
+  const RunResult resumed = run_lightstage(resume);
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err << dome.logs();
+  const auto report = nlohmann::json::parse(resumed.out);
+  EXPECT_EQ(report.at("taken_now").get<std::size_t>(), 36 - done) << "finished LEDs are not taken again";
+  EXPECT_EQ(report.at("bracket_frames").get<std::size_t>(), 2 * (36 - done));
+  // Another bracket than the one planned is refused.
+  std::vector<std::string> other = capture_args(dome, cut);
+  other.insert(other.end(), {"--leds", leds, "--bracket", "0,-3", "--resume"});
+  EXPECT_NE(run_lightstage(other).exit_code, 0);
+
+  const ImageStack x = io::load_stack(whole), y = io::load_stack(cut);
+  ASSERT_EQ(x.frames.size(), 36u);
+  ASSERT_EQ(y.frames.size(), 36u);
+  for (std::size_t i = 0; i < x.frames.size(); ++i) {
+    EXPECT_EQ(x.frames[i].led_id, y.frames[i].led_id);
+    EXPECT_EQ(cv::norm(x.frames[i].image, y.frames[i].image, cv::NORM_INF), 0) << "frame " << i;
+  }
 }
 
 }  // namespace

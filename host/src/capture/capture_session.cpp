@@ -3,6 +3,7 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
 #include "lightstage/host/capture/frame_matcher.hpp"
+#include "lightstage/host/capture/hdr_merge.hpp"
 #include "lightstage/host/capture/response_curve.hpp"
 #include "lightstage/host/controller/sequences.hpp"
 #include "lightstage/host/io/image_io.hpp"
@@ -12,6 +13,7 @@
 #include "util/utc_time.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <opencv2/core.hpp>
 
 #include <algorithm>
@@ -56,6 +58,17 @@ std::string led_name(int id) { return id < 0 ? std::string("dark") : fmt::format
 
 double full_scale(const camera::Frame& f) { return std::ldexp(1.0, f.bit_depth) - 1; }
 
+// A raw value at or above this share of full scale counts as clipped.
+constexpr double kClippedShare = 0.98;
+
+// The longest exposure an LED may be lit for (its on-time limit, open loop's
+// margin included) and the camera allows.
+double longest_exposure_us(const Led& led, const camera::ControlInfo& range, std::uint32_t settle_us) {
+  const double longest = std::min(range.exposure_max_us > 0 ? range.exposure_max_us : 1e12,
+                                  (led.limits.max_on_us - settle_us - 300) / 1.05);
+  return std::max(longest, 1.0);
+}
+
 class CaptureRun {
  public:
   CaptureRun(const Rig& rig, ControllerClient& controller, camera::Camera& cam, const CaptureOptions& options)
@@ -78,8 +91,13 @@ class CaptureRun {
   Batch run_software_batch(const std::vector<Shot>& shots);
   std::map<double, double> take_darks(const std::set<double>& exposures);
   std::map<int, double> auto_exposures(const std::vector<int>& leds);
+  std::vector<double> bracket_exposures(int led_id, double exposure_us);
+  void take_single(Progress& progress, std::size_t max_steps, const std::set<double>& exposures);
+  void take_brackets(Progress& progress, std::size_t max_steps);
+  cv::Mat dark_image(double exposure_us);
   void load_previous();
   void add_frame(std::size_t plan_index, const Taken& taken);
+  void add_hdr_frame(std::size_t plan_index, const std::vector<std::pair<double, Taken>>& bracket);
   void write_index(bool complete);
 
   const Rig& rig_;
@@ -97,7 +115,9 @@ class CaptureRun {
   std::map<int, double> exposure_of_;           // per LED
   std::map<double, double> black_of_exposure_;  // dark-frame mean per exposure
   std::map<double, std::string> dark_file_of_exposure_;
-  std::map<std::size_t, Frame> frames_;  // by plan index: frames in the stack
+  std::map<double, cv::Mat> dark_of_exposure_;     // as written: 16-bit DN, or linearised float
+  std::map<int, std::vector<double>> bracket_of_;  // HDR: per LED, its exposures, shortest first
+  std::map<std::size_t, Frame> frames_;            // by plan index: frames in the stack
   std::map<std::size_t, nlohmann::json> frame_extra_;
   CaptureReport report_;
 };
@@ -290,6 +310,7 @@ std::map<double, double> CaptureRun::take_darks(const std::set<double>& exposure
     }
     dark_file_of_exposure_[exposure] = name;
     black_of_exposure_[exposure] = cv::mean(dark)[0];
+    dark_of_exposure_[exposure] = dark;
     report_.dark_frames += batch.taken.size();
   }
   return black;
@@ -314,17 +335,15 @@ std::map<int, double> CaptureRun::auto_exposures(const std::vector<int>& leds) {
       const auto at = static_cast<int>(std::floor(options_.auto_percentile * (values.cols - 1)));
       const double full = full_scale(taken.frame);
       const double level = values.at<double>(0, at);
-      if (level >= 0.98 * full) {
+      if (level >= kClippedShare * full) {
         saturated.push_back(id);  // clipped: measure again shorter
         continue;
       }
       double e = preview * options_.auto_target * full / std::max(level, 1.0);
       // Steps of 1/6 stop, so LEDs group into few exposures (one sequence each).
       e = start * std::exp2(std::round(6 * std::log2(e / start)) / 6);
-      const Led& led = rig_.led(id);
-      const double longest = std::min(range.exposure_max_us > 0 ? range.exposure_max_us : 1e12,
-                                      (led.limits.max_on_us - options_.settle_us - 300) / 1.05);
-      exposure[id] = std::clamp(e, std::max(range.exposure_min_us, 1.0), std::max(longest, 1.0));
+      const double longest = longest_exposure_us(rig_.led(id), range, options_.settle_us);
+      exposure[id] = std::clamp(e, std::max(range.exposure_min_us, 1.0), longest);
     }
     todo = saturated;
     preview /= 8;
@@ -349,6 +368,10 @@ void CaptureRun::add_frame(std::size_t plan_index, const Taken& taken) {
   frame.exposure_us = exposure;
   frame.gain = taken.frame.analogue_gain;
   frame.black_level = black_of_exposure_.count(exposure_of_[id]) ? black_of_exposure_[exposure_of_[id]] : 0;
+  if (dark_file_of_exposure_.count(exposure_of_[id])) {
+    frame.dark_file = dark_file_of_exposure_[exposure_of_[id]];
+    frame.dark = dark_image(exposure_of_[id]);
+  }
   if (response_) {
     io::write_pfm(options_.out / frame.filename, frame.image);
   } else {
@@ -360,11 +383,150 @@ void CaptureRun::add_frame(std::size_t plan_index, const Taken& taken) {
                           {"trigger_ns", taken.step.trigger_ns()},
                           {"leds_on_ns", taken.step.leds_on_ns()},
                           {"leds_off_ns", taken.step.leds_off_ns()}};
-  if (dark_file_of_exposure_.count(exposure_of_[id]))
-    extra["dark"] = dark_file_of_exposure_[exposure_of_[id]];
   frames_[plan_index] = std::move(frame);
   frame_extra_[plan_index] = std::move(extra);
   ++report_.taken_now;
+}
+
+cv::Mat CaptureRun::dark_image(double exposure_us) {
+  if (const auto it = dark_of_exposure_.find(exposure_us); it != dark_of_exposure_.end()) return it->second;
+  const auto file = dark_file_of_exposure_.find(exposure_us);
+  if (file == dark_file_of_exposure_.end()) return {};         // no darks: black level 0
+  cv::Mat dark = io::read_image(options_.out / file->second);  // taken before an interruption
+  dark_of_exposure_[exposure_us] = dark;
+  return dark;
+}
+
+// base · 2^stop for each stop, in whole microseconds within what the camera
+// and the LED's on-time limit allow; shortest first, without repeats.
+std::vector<double> CaptureRun::bracket_exposures(int led_id, double exposure_us) {
+  const camera::ControlInfo range = cam_.control_info();
+  const double shortest = std::max(range.exposure_min_us, 1.0);
+  const double longest = std::max(shortest, longest_exposure_us(rig_.led(led_id), range, options_.settle_us));
+  std::set<double> exposures;
+  for (const double stop : options_.bracket_stops)
+    exposures.insert(std::clamp(std::round(exposure_us * std::exp2(stop)), shortest, longest));
+  return {exposures.begin(), exposures.end()};
+}
+
+// One LED's bracket, merged into one float frame per exposure-second.
+void CaptureRun::add_hdr_frame(std::size_t plan_index, const std::vector<std::pair<double, Taken>>& bracket) {
+  const int id = plan_[plan_index];
+  const Led& led = rig_.led(id);
+  std::vector<HdrSample> samples;
+  nlohmann::json exposures = nlohmann::json::array(), details = nlohmann::json::array();
+  for (const auto& [planned, taken] : bracket) {
+    const double exposure = taken.frame.exposure_us > 0 ? taken.frame.exposure_us : planned;
+    samples.push_back({taken.frame.image, dark_image(planned), exposure});
+    exposures.push_back(exposure);
+    nlohmann::json detail = {{"exposure_us", exposure},
+                             {"frame_sequence", taken.frame.sequence},
+                             {"frame_timestamp_ns", taken.frame.timestamp_ns},
+                             {"frame_clock", std::string(camera::to_string(taken.frame.clock))},
+                             {"trigger_ns", taken.step.trigger_ns()},
+                             {"leds_on_ns", taken.step.leds_on_ns()},
+                             {"leds_off_ns", taken.step.leds_off_ns()}};
+    if (dark_file_of_exposure_.count(planned)) detail["dark"] = dark_file_of_exposure_[planned];
+    details.push_back(std::move(detail));
+  }
+  HdrMergeOptions merge_options;
+  merge_options.saturation_dn = kClippedShare * full_scale(bracket.front().second.frame);
+  merge_options.response = response_ ? &*response_ : nullptr;
+  const HdrMerge merged = merge_hdr(samples, merge_options);
+  for (std::size_t i = 0; i < details.size(); ++i) details[i]["clipped_values"] = merged.clipped[i];
+
+  const double gain = bracket.front().second.frame.analogue_gain;
+  Frame frame;
+  frame.filename = fmt::format("{:03}.pfm", plan_index + 1);
+  frame.image = merged.image;
+  frame.led_id = id;
+  frame.led_position_mm = led.position_mm;
+  frame.light_direction = rig_.light_direction(led);
+  // Values are per exposure-second: as if exposed for 1 s, dark already subtracted.
+  constexpr double kSecondUs = 1e6;
+  const double scale = (kSecondUs / rig_.camera.exposure_us) * (gain / rig_.camera.gain);
+  frame.light_intensity = Vec3::Constant(led.relative_intensity * scale);
+  frame.exposure_us = kSecondUs;
+  frame.gain = gain;
+  frame.black_level = 0;
+  frame.saturation_level = merged.saturation_level;
+  io::write_pfm(options_.out / frame.filename, frame.image);
+  frames_[plan_index] = std::move(frame);
+  frame_extra_[plan_index] = {{"bracket_exposures_us", exposures},
+                              {"bracket", details},
+                              {"hdr_saturated_values", merged.saturated_values}};
+  ++report_.taken_now;
+  report_.bracket_frames += bracket.size();
+}
+
+// One batch per exposure, LEDs in plan order within it.
+void CaptureRun::take_single(Progress& progress, std::size_t max_steps, const std::set<double>& exposures) {
+  for (const double exposure : exposures) {
+    std::vector<Shot> shots;
+    std::vector<std::size_t> plan_index;
+    for (std::size_t i = 0; i < plan_.size(); ++i) {
+      if (exposure_of_[plan_[i]] == exposure && !frames_.count(i)) {
+        shots.push_back({plan_[i], exposure});
+        plan_index.push_back(i);
+      }
+    }
+    for (std::size_t begin = 0; begin < shots.size(); begin += max_steps) {
+      const std::size_t end = std::min(shots.size(), begin + max_steps);
+      const std::vector<Shot> part(shots.begin() + static_cast<std::ptrdiff_t>(begin),
+                                   shots.begin() + static_cast<std::ptrdiff_t>(end));
+      Batch batch = run_batch(part);
+      report_.retakes += batch.retakes;
+      report_.duplicates += batch.duplicates;
+      report_.camera_wait_seconds += batch.camera_wait_seconds;
+      for (auto& [k, taken] : batch.taken) {
+        add_frame(plan_index[begin + k], taken);
+        write_index(false);  // the folder stays a loadable stack of every frame on disk
+        progress.advance();
+      }
+    }
+  }
+}
+
+// LEDs grouped by their exposure and cut into groups of one sequence's
+// length; each group is taken at each of its bracket exposures (one sequence
+// per exposure, shortest first), then merged and written LED by LED. An
+// interruption loses at most one group's brackets; finished LEDs are kept.
+void CaptureRun::take_brackets(Progress& progress, std::size_t max_steps) {
+  std::map<double, std::vector<std::size_t>> by_exposure;
+  for (std::size_t i = 0; i < plan_.size(); ++i) {
+    if (!frames_.count(i)) by_exposure[exposure_of_[plan_[i]]].push_back(i);
+  }
+  for (const auto& [base, indices] : by_exposure) {
+    for (std::size_t begin = 0; begin < indices.size(); begin += max_steps) {
+      const std::vector<std::size_t> group(
+          indices.begin() + static_cast<std::ptrdiff_t>(begin),
+          indices.begin() + static_cast<std::ptrdiff_t>(std::min(indices.size(), begin + max_steps)));
+      std::set<double> exposures;
+      for (const std::size_t i : group) {
+        for (const double e : bracket_of_.at(plan_[i])) exposures.insert(e);
+      }
+      std::map<std::size_t, std::vector<std::pair<double, Taken>>> brackets;
+      for (const double exposure : exposures) {
+        std::vector<Shot> shots;
+        std::vector<std::size_t> owner;
+        for (const std::size_t i : group) {
+          if (std::ranges::count(bracket_of_.at(plan_[i]), exposure) == 0) continue;
+          shots.push_back({plan_[i], exposure});
+          owner.push_back(i);
+        }
+        Batch batch = run_batch(shots);
+        report_.retakes += batch.retakes;
+        report_.duplicates += batch.duplicates;
+        report_.camera_wait_seconds += batch.camera_wait_seconds;
+        for (auto& [k, taken] : batch.taken) brackets[owner[k]].emplace_back(exposure, std::move(taken));
+      }
+      for (const std::size_t i : group) {
+        add_hdr_frame(i, brackets.at(i));
+        write_index(false);
+        progress.advance();
+      }
+    }
+  }
 }
 
 void CaptureRun::write_index(bool complete) {
@@ -380,7 +542,9 @@ void CaptureRun::write_index(bool complete) {
   for (const auto& [id, e] : exposure_of_) exposures[std::to_string(id)] = e;
   nlohmann::json darks = nlohmann::json::object();
   for (const auto& [e, file] : dark_file_of_exposure_)
-    darks[fmt::format("{:.0f}", e)] = {{"file", file}, {"mean", black_of_exposure_[e]}};
+    darks[fmt::format("{:.0f}", e)] = {{"file", file}, {"mean", black_of_exposure_[e]}, {"exposure_us", e}};
+  nlohmann::json brackets = nlohmann::json::object();
+  for (const auto& [id, list] : bracket_of_) brackets[std::to_string(id)] = list;
   const camera::CameraInfo cam = cam_.info();
   nlohmann::json extra = {
       {"capture",
@@ -393,6 +557,8 @@ void CaptureRun::write_index(bool complete) {
         {"loop", closed_loop_ ? "closed" : "open"},
         {"trigger", hardware_ ? "hardware" : "software"},
         {"darks", darks},
+        {"bracket_stops", options_.bracket_stops},
+        {"bracket_exposure_us", brackets},
         {"camera", {{"uri", cam.uri}, {"model", cam.model}, {"driver", cam.driver}}},
         {"controller",
          {{"firmware", controller_.info().firmware_version()}, {"rig", controller_.info().rig_name()}}},
@@ -432,10 +598,21 @@ void CaptureRun::load_previous() {
     fail("{}: cannot resume: it was planned for other LEDs ({} of them) than this run ({})",
          manifest_path.string(), planned.size(), plan_.size());
   }
+  const auto stops = c.value("bracket_stops", std::vector<double>{});
+  if (stops != options_.bracket_stops) {
+    fail("{}: cannot resume: it was planned with bracket stops [{}], this run asks for [{}]",
+         manifest_path.string(), fmt::join(stops, ","), fmt::join(options_.bracket_stops, ","));
+  }
   for (const auto& [id, e] : c.at("exposure_us").items()) exposure_of_[std::stoi(id)] = e.get<double>();
-  for (const auto& [e, d] : c.at("darks").items()) {
-    dark_file_of_exposure_[std::stod(e)] = d.at("file").get<std::string>();
-    black_of_exposure_[std::stod(e)] = d.at("mean").get<double>();
+  if (c.contains("bracket_exposure_us")) {
+    for (const auto& [id, list] : c.at("bracket_exposure_us").items())
+      bracket_of_[std::stoi(id)] = list.get<std::vector<double>>();
+  }
+  for (const auto& [key, d] : c.at("darks").items()) {
+    // The exact exposure (the key is rounded to whole microseconds).
+    const double e = d.value("exposure_us", std::stod(key));
+    dark_file_of_exposure_[e] = d.at("file").get<std::string>();
+    black_of_exposure_[e] = d.at("mean").get<double>();
   }
   // The frames the manifest lists (written after each frame's image, so every
   // frame it names is complete on disk; a frame in flight when the capture
@@ -466,9 +643,11 @@ void CaptureRun::load_previous() {
     frame.gain = entry.value("gain", 1.0);
     frame.black_level = entry.value("black_level", 0.0);
     frame.saturation_level = entry.value("saturation_level", 0.0);
+    frame.dark_file = entry.value("dark", std::string());
     nlohmann::json extra = entry;
-    for (const char* key : {"index", "file", "led_id", "light_direction", "light_intensity",
-                            "led_position_mm", "exposure_us", "gain", "black_level", "saturation_level"}) {
+    for (const char* key :
+         {"index", "file", "led_id", "light_direction", "light_intensity", "led_position_mm", "exposure_us",
+          "gain", "black_level", "saturation_level", "dark"}) {
       extra.erase(key);
     }
     frames_[done[k]] = std::move(frame);
@@ -524,51 +703,42 @@ CaptureReport CaptureRun::run() {
       for (const auto& [id, e] : auto_exposures(unplanned)) exposure_of_[id] = e;
     }
   }
+  const bool hdr = !options_.bracket_stops.empty();
+  if (hdr) {
+    for (const int id : plan_) {
+      if (!bracket_of_.count(id)) bracket_of_[id] = bracket_exposures(id, exposure_of_.at(id));
+    }
+  }
   write_index(false);
-  std::set<double> exposures;
+  std::set<double> exposures;  // every exposure a frame is taken at: one dark each
   for (const auto& [id, e] : exposure_of_) exposures.insert(e);
+  if (hdr) {
+    exposures.clear();
+    for (const int id : plan_) exposures.insert(bracket_of_[id].begin(), bracket_of_[id].end());
+  }
   take_darks(exposures);
   write_index(false);
 
   Progress progress("capture", plan_.size(), "frames", options_.mode);
   progress.advance(frames_.size());
-  // One batch per exposure, LEDs in plan order within it.
-  for (const double exposure : exposures) {
-    std::vector<Shot> shots;
-    std::vector<std::size_t> plan_index;
-    for (std::size_t i = 0; i < plan_.size(); ++i) {
-      if (exposure_of_[plan_[i]] == exposure && !frames_.count(i)) {
-        shots.push_back({plan_[i], exposure});
-        plan_index.push_back(i);
-      }
-    }
-    // Short sequences: frames are matched and written after each, so an
-    // interruption loses at most one sequence's worth of frames.
-    constexpr std::size_t kFramesPerSequence = 12;
-    const std::size_t max_steps = std::clamp<std::size_t>(
-        controller_.info().capabilities().max_sequence_steps(), 1, kFramesPerSequence);
-    for (std::size_t begin = 0; begin < shots.size(); begin += max_steps) {
-      const std::size_t end = std::min(shots.size(), begin + max_steps);
-      const std::vector<Shot> part(shots.begin() + static_cast<std::ptrdiff_t>(begin),
-                                   shots.begin() + static_cast<std::ptrdiff_t>(end));
-      Batch batch = run_batch(part);
-      report_.retakes += batch.retakes;
-      report_.duplicates += batch.duplicates;
-      report_.camera_wait_seconds += batch.camera_wait_seconds;
-      for (auto& [k, taken] : batch.taken) {
-        add_frame(plan_index[begin + k], taken);
-        write_index(false);  // the folder stays a loadable stack of every frame on disk
-        progress.advance();
-      }
-    }
+  // Short sequences: frames are matched and written after each, so an
+  // interruption loses at most one sequence's worth of frames.
+  constexpr std::size_t kFramesPerSequence = 12;
+  const std::size_t max_steps =
+      std::clamp<std::size_t>(controller_.info().capabilities().max_sequence_steps(), 1, kFramesPerSequence);
+  if (hdr) {
+    take_brackets(progress, max_steps);
+  } else {
+    take_single(progress, max_steps, exposures);
   }
   progress.finish();
   write_index(true);
   report_.frames = frames_.size();
   report_.seconds = seconds_since(started);
   report_.message = fmt::format(
-      "{} frames in {:.1f} s ({} taken now, {} retaken, {} duplicates dropped, {} dark)", report_.frames,
-      report_.seconds, report_.taken_now, report_.retakes, report_.duplicates, report_.dark_frames);
+      "{} frames in {:.1f} s ({} taken now, {} retaken, {} duplicates dropped, {} dark{})", report_.frames,
+      report_.seconds, report_.taken_now, report_.retakes, report_.duplicates, report_.dark_frames,
+      hdr ? fmt::format(", HDR from {} bracket frames", report_.bracket_frames) : std::string());
   return report_;
 }
 
@@ -601,16 +771,22 @@ void CaptureOptions::check() const {
   if (loop != "open" && loop != "closed" && loop != "auto") {
     fail("capture: --loop must be open, closed or auto, got '{}'", loop);
   }
+  if (!bracket_stops.empty()) {
+    if (bracket_stops.size() < 2)
+      fail("capture: --bracket needs at least 2 stops, got {}", bracket_stops.size());
+    std::set<double> seen;
+    for (const double stop : bracket_stops) {
+      if (!(std::abs(stop) <= 16)) fail("capture: --bracket stop {} is not within [-16, 16]", stop);
+      if (!seen.insert(stop).second) fail("capture: --bracket stop {} is given twice", stop);
+    }
+  }
 }
 
 nlohmann::json CaptureReport::to_json() const {
-  return {{"frames", frames},
-          {"taken_now", taken_now},
-          {"retakes", retakes},
-          {"duplicates", duplicates},
-          {"dark_frames", dark_frames},
-          {"seconds", seconds},
-          {"camera_wait_seconds", camera_wait_seconds},
+  return {{"frames", frames},           {"taken_now", taken_now},
+          {"retakes", retakes},         {"duplicates", duplicates},
+          {"dark_frames", dark_frames}, {"bracket_frames", bracket_frames},
+          {"seconds", seconds},         {"camera_wait_seconds", camera_wait_seconds},
           {"message", message}};
 }
 

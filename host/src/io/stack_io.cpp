@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <system_error>
 
 namespace lightstage::io {
@@ -42,6 +43,64 @@ std::string vec3_lines(const std::vector<Frame>& frames, bool directions) {
     text += fmt::format("{:.9g} {:.9g} {:.9g}\n", v.x(), v.y(), v.z());
   }
   return text;
+}
+
+// The dark frames the manifest names, each read once and shared by its frames.
+void load_darks(const fs::path& dir, const fs::path& manifest_path, ImageStack& stack) {
+  std::map<std::string, cv::Mat> darks;
+  const cv::Mat& first = stack.frames.front().image;
+  for (std::size_t i = 0; i < stack.frames.size(); ++i) {
+    Frame& frame = stack.frames[i];
+    if (frame.dark_file.empty()) continue;
+    auto it = darks.find(frame.dark_file);
+    if (it == darks.end()) {
+      const fs::path path = dir / frame.dark_file;
+      if (!file_exists(path)) {
+        fail("{}: frames[{}].dark: '{}' is not in the stack folder", manifest_path.string(), i,
+             frame.dark_file);
+      }
+      cv::Mat dark = read_image(path);
+      if (dark.size() != first.size() || dark.channels() != first.channels()) {
+        fail("{}: dark frame is {} {}, but the images are {} {}", path.string(), size_text(dark),
+             type_text(dark), size_text(first), type_text(first));
+      }
+      it = darks.emplace(frame.dark_file, std::move(dark)).first;
+    }
+    frame.dark = it->second;
+  }
+}
+
+// The dark frames the stack's frames name, by file name, each once; checked
+// before write_stack writes anything.
+std::map<std::string, cv::Mat> darks_to_write(const fs::path& dir, const ImageStack& stack) {
+  std::map<std::string, cv::Mat> darks;
+  const cv::Mat& first = stack.frames.front().image;
+  for (std::size_t i = 0; i < stack.frames.size(); ++i) {
+    const Frame& frame = stack.frames[i];
+    if (frame.dark.empty() && frame.dark_file.empty()) continue;
+    if (frame.dark_file.empty()) fail("{}: frame {} has a dark frame but no dark_file name", dir.string(), i);
+    if (frame.dark.empty()) {
+      fail("{}: frame {} names dark '{}' but carries no dark image to write", dir.string(), i,
+           frame.dark_file);
+    }
+    const bool is_float = frame.dark.depth() == CV_32F;
+    if (frame.dark_file.find('/') != std::string::npos ||
+        fs::path(frame.dark_file).extension() != (is_float ? ".pfm" : ".png")) {
+      fail("{}: frame {} dark file name '{}' must be a plain file name ending in {}", dir.string(), i,
+           frame.dark_file, is_float ? ".pfm" : ".png");
+    }
+    if (frame.dark.size() != first.size() || frame.dark.channels() != first.channels()) {
+      fail("{}: frame {} dark is {} {}, the images are {} {}", dir.string(), i, size_text(frame.dark),
+           type_text(frame.dark), size_text(first), type_text(first));
+    }
+    const auto [it, added] = darks.emplace(frame.dark_file, frame.dark);
+    const cv::Mat& known = it->second;
+    if (!added && known.data != frame.dark.data &&
+        (known.type() != frame.dark.type() || cv::norm(known, frame.dark, cv::NORM_INF) != 0)) {
+      fail("{}: frames name dark '{}' for two different images", dir.string(), frame.dark_file);
+    }
+  }
+  return darks;
 }
 
 }  // namespace
@@ -156,7 +215,10 @@ ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
   }
 
   const fs::path manifest_path = dir / "manifest.json";
-  if (options.read_manifest && file_exists(manifest_path)) apply_manifest(manifest_path, stack);
+  if (options.read_manifest && file_exists(manifest_path)) {
+    apply_manifest(manifest_path, stack);
+    load_darks(dir, manifest_path, stack);
+  }
   return stack;
 }
 
@@ -195,6 +257,8 @@ void write_stack(const fs::path& dir, const ImageStack& stack, const nlohmann::j
     if (!stack.ground_truth->depth.empty()) files.depth = "depth_gt.pfm";
   }
   const nlohmann::json manifest = build_manifest(stack, files, extra_manifest);
+  const std::map<std::string, cv::Mat> darks =
+      write_images ? darks_to_write(dir, stack) : std::map<std::string, cv::Mat>{};
 
   std::error_code error;
   fs::create_directories(dir, error);
@@ -211,6 +275,13 @@ void write_stack(const fs::path& dir, const ImageStack& stack, const nlohmann::j
                             }
                           }
                         });
+  for (const auto& [file, dark] : darks) {
+    if (dark.depth() == CV_32F) {
+      write_pfm(dir / file, dark);
+    } else {
+      write_png(dir / file, dark);
+    }
+  }
   std::string names;
   for (const auto& name : files.frames) names += name + "\n";
   util::write_text_atomic(dir / "filenames.txt", names);

@@ -4,6 +4,7 @@
 #include "lightstage/common/version.hpp"
 #include "util/utc_time.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 
@@ -45,6 +46,7 @@ json build_manifest(const ImageStack& stack, const StackFiles& files, const json
     entry["gain"] = frame.gain;
     entry["black_level"] = frame.black_level;
     entry["saturation_level"] = frame.saturation_level;
+    if (!frame.dark_file.empty()) entry["dark"] = frame.dark_file;
     frames.push_back(std::move(entry));
   }
   if (const auto extra_frames = extra.find("frames"); extra_frames != extra.end()) {
@@ -149,6 +151,18 @@ void apply_manifest(const std::filesystem::path& path, ImageStack& stack) {
     if (frame.gain <= 0) fail("{}: frames[{}].gain: must be positive, got {}", path.string(), i, frame.gain);
     if (frame.saturation_level < 0) {
       fail("{}: frames[{}].saturation_level: negative value {}", path.string(), i, frame.saturation_level);
+    }
+    if (const auto dark = entry.find("dark"); dark != entry.end() && !dark->is_null()) {
+      if (!dark->is_string())
+        fail("{}: frames[{}].dark: expected a file name, got {}", path.string(), i, dark->dump());
+      const std::string name = dark->get<std::string>();
+      const std::filesystem::path relative(name);
+      if (name.empty() || relative.is_absolute() ||
+          std::any_of(relative.begin(), relative.end(),
+                      [](const std::filesystem::path& part) { return part == ".."; })) {
+        fail("{}: frames[{}].dark: '{}' must name a file inside the stack folder", path.string(), i, name);
+      }
+      frame.dark_file = name;
     }
   }
 }

@@ -28,7 +28,8 @@ struct StackFiles {
 nlohmann::json build_manifest(const ImageStack& stack, const StackFiles& files, const nlohmann::json& extra);
 
 // Reads `path` and fills each frame's led_id, led_position_mm, exposure_us,
-// gain, black_level and saturation_level. Throws InputError naming the file
+// gain, black_level, saturation_level and dark_file (the images themselves are
+// loaded by load_stack). Throws InputError naming the file
 // and the field for bad JSON, a wrong format or version, a frame count or
 // file name that disagrees with filenames.txt, or a value of the wrong type.
 void apply_manifest(const std::filesystem::path& path, ImageStack& stack);

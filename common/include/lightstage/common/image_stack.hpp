@@ -25,7 +25,14 @@ struct Frame {
   std::optional<Vec3> led_position_mm;   // when the light is a known near point
   double exposure_us = 0;                // 0 when unknown
   double gain = 1.0;
-  double black_level = 0;       // in the image's own units (DN), subtracted by radiometry
+  double black_level = 0;  // in the image's own units (DN), subtracted by radiometry
+  // The averaged dark frame taken at this frame's exposure: same size and
+  // channel count as `image`, in the image's own units (any depth). When set,
+  // radiometry subtracts it pixel by pixel instead of `black_level`.
+  // `dark_file` names it in the stack folder (manifest key "dark"); frames
+  // taken at one exposure share one dark (cv::Mat shares the pixels).
+  cv::Mat dark;
+  std::string dark_file;
   double saturation_level = 0;  // DN at and above which a pixel is clipped; 0 = type maximum
 };
 

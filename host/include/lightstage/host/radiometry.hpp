@@ -9,6 +9,13 @@
 // to ≤ 1 (optional, on by default: the DiLiGenT baseline is computed so).
 // Values below 0 (black level above the raw value) are kept as they are.
 //
+// Dark subtraction: a frame with a dark frame (Frame::dark, the averaged
+// dark of its exposure) has it subtracted pixel by pixel, channel by channel,
+// in place of black_level; a frame without one (DiLiGenT, simulated stacks,
+// captures without darks) falls back to the scalar black_level. The pixel
+// pattern of a dark (hot pixels, amplifier glow, column offsets) is so
+// removed where a scalar level would leave it in the signal.
+//
 // Saturation is reported beside the values, not folded into them: an
 // observation is saturated when any raw channel is ≥ the frame's saturation
 // level (Frame::saturation_level, or the type maximum when that is 0; float
@@ -58,7 +65,8 @@ struct Observations {
 
 // Converts `stack` as described above. An empty stack mask means every pixel.
 // Throws InputError when the stack has no frames, frames of different size or
-// type, an unsupported pixel type, or a mask of the wrong size or type.
+// type, an unsupported pixel type, a dark frame that does not fit its frame,
+// or a mask of the wrong size or type.
 Observations make_observations(const ImageStack& stack, const RadiometryOptions& options = {});
 
 }  // namespace lightstage

@@ -6,8 +6,12 @@
 // every frame it took. `resume` picks up where the manifest says it stopped.
 //
 // Exposure: fixed, or automatic per LED from a preview pass (the brightest
-// pixels aimed at a share of saturation). Dark frames per exposure give the
-// black level. Dropped frames are retaken; duplicates are dropped.
+// pixels aimed at a share of saturation). Dark frames per exposure are
+// averaged, written, and named by each frame of that exposure (radiometry
+// subtracts them pixel by pixel). With a bracket, every LED is taken at
+// several exposures (one controller sequence per exposure) and the frames are
+// merged into one float frame per LED (hdr_merge.hpp). Dropped frames are
+// retaken; duplicates are dropped.
 
 #include "lightstage/common/camera.hpp"
 #include "lightstage/common/rig.hpp"
@@ -38,6 +42,10 @@ struct CaptureOptions {
   std::uint32_t settle_us = 500;
   std::uint32_t gap_us = 500;
   std::vector<int> led_ids;  // empty = every LED of the rig, in rig order
+  // HDR: stops relative to each LED's exposure (fixed or automatic), e.g.
+  // {0, -3, -6}; every LED is taken at each and the frames merged into one
+  // PFM frame in full scale per exposure-second. Empty = one exposure per LED.
+  std::vector<double> bracket_stops;
   // The camera's inverse response (response_curve.hpp) for cameras that are
   // not linear: frames and darks are linearised and written as float PFM.
   std::filesystem::path response;
@@ -52,6 +60,7 @@ struct CaptureReport {
   std::size_t retakes = 0;     // steps run again after a dropped frame
   std::size_t duplicates = 0;  // frames matched to no step
   std::size_t dark_frames = 0;
+  std::size_t bracket_frames = 0;  // camera frames merged into this run's HDR frames
   double seconds = 0;              // wall time of the run
   double camera_wait_seconds = 0;  // time spent waiting for frames after the controller finished
   std::string message;

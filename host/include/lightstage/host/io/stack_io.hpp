@@ -9,7 +9,8 @@
 //   mask.png               object where the mask equals its maximum (optional: all pixels)
 //   Normal_gt.png          ground-truth normals, normal-map encoding (optional)
 //   depth_gt.pfm           ground-truth depth (optional)
-//   manifest.json          per-frame LED id, exposure, gain, levels + rig/scene (optional)
+//   dark_<exposure>us.png  averaged dark frames, named per frame by the manifest's "dark" (optional)
+//   manifest.json          per-frame LED id, exposure, gain, levels, dark + rig/scene (optional)
 
 #include "lightstage/common/image_stack.hpp"
 
@@ -38,14 +39,16 @@ struct LoadOptions {
 // required file, a listed image that is missing or not an image, images of
 // different size or type, fewer than min_images images, direction or
 // intensity files with the wrong number of lines or malformed numbers, a
-// zero-length direction, a non-positive intensity, a mask, ground truth or
-// manifest that does not fit the images.
+// zero-length direction, a non-positive intensity, a mask, ground truth,
+// dark frame or manifest that does not fit the images. Dark frames named by
+// the manifest are read once each and shared by the frames naming them.
 ImageStack load_stack(const std::filesystem::path& dir, const LoadOptions& options = {});
 
 // Writes `stack` into `dir` (created if needed) in the same layout. Frames are
 // written in their own type (8/16-bit PNG, float PFM) under Frame::filename
 // (default "001.png", ... / "001.pfm"); the mask, Normal_gt.png and
-// depth_gt.pfm are written when present; manifest.json last. Keys of
+// depth_gt.pfm are written when present, and with `write_images` each
+// Frame::dark under its Frame::dark_file (once per name); manifest.json last. Keys of
 // `extra_manifest` (an object: rig, scene, sensor, ...) are added at the top
 // level; an "extra_manifest.frames" array of objects, one per frame, is merged
 // into the frame entries. Every file is written atomically. With
