@@ -58,9 +58,10 @@ struct SolveArgs {
   MonotonicOptions monotonic;
   BiPolynomialOptions bipolynomial;
   AutoOptions automatic;
-  ShapePriorArgs shape_prior;             // --method shape-prior (shape_prior_args.hpp)
-  std::string estimator = "irls-l1";      // --estimator, robust
-  std::string azimuth_from = "isotropy";  // --azimuth-from, monotonic
+  ShapePriorArgs shape_prior;         // --method shape-prior (shape_prior_args.hpp)
+  std::string estimator = "irls-l1";  // --estimator, robust
+  std::string azimuth_from =
+      "robust";  // --azimuth-from, monotonic (robust: better on the sweep and the ball)
   // Flags every method shares: when given, resolve() copies them into each method's options.
   std::optional<double> shadow_threshold, t_low;
   std::optional<int> min_observations, threads, max_iterations;
