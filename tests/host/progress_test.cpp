@@ -79,7 +79,11 @@ TEST(SolverProgress, EveryPixelIsCountedOnce) {
   const std::size_t pixels = scene.observations.pixel_count();
   std::atomic<std::size_t> counted{0};
   const SolveProgress count = [&counted](std::size_t items) { counted += items; };
-  auto expect_counted = [&](const SolveResult& with, const SolveResult& without, const char* what) {
+  // Solves with and without a progress report: every pixel counted once, the same normals.
+  auto expect_counted = [&](auto options, auto solve, const char* what) {
+    const SolveResult without = solve(scene.observations, options);
+    options.progress = count;
+    const SolveResult with = solve(scene.observations, options);
     EXPECT_EQ(counted.exchange(0), pixels) << what;
     EXPECT_EQ(cv::norm(with.normals, without.normals, cv::NORM_INF), 0.0) << what;
   };
@@ -87,25 +91,17 @@ TEST(SolverProgress, EveryPixelIsCountedOnce) {
     L2Options l2;
     l2.threads = 3;
     l2.t_low = t_low;
-    const SolveResult without = solve_lambertian(scene.observations, l2);
-    l2.progress = count;
-    expect_counted(solve_lambertian(scene.observations, l2), without, "l2");
+    expect_counted(l2, solve_lambertian, "l2");
   }
   RobustOptions robust;
   robust.threads = 3;
-  const SolveResult robust_without = solve_robust(scene.observations, robust);
-  robust.progress = count;
-  expect_counted(solve_robust(scene.observations, robust), robust_without, "robust");
+  expect_counted(robust, solve_robust, "robust");
   BiPolynomialOptions bipolynomial;
   bipolynomial.threads = 2;
-  const SolveResult bipolynomial_without = solve_bipolynomial(scene.observations, bipolynomial);
-  bipolynomial.progress = count;
-  expect_counted(solve_bipolynomial(scene.observations, bipolynomial), bipolynomial_without, "biquadratic");
+  expect_counted(bipolynomial, solve_bipolynomial, "biquadratic");
   AutoOptions automatic;
   automatic.threads = 2;
-  const SolveResult auto_without = solve_auto(scene.observations, automatic);
-  automatic.progress = count;
-  expect_counted(solve_auto(scene.observations, automatic), auto_without, "auto");
+  expect_counted(automatic, solve_auto, "auto");
 }
 
 // A hemisphere's normals over a disk mask.
