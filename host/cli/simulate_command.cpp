@@ -62,7 +62,7 @@ sim::NaturalLightingKind parse_environment(const std::string& text) {
 // stack, a degraded depth prior and, for a pinhole camera, its intrinsics.
 nlohmann::json simulate_natural_to_folder(const std::filesystem::path& rig_path,
                                           const sim::SimulateOptions& options, const NaturalArgs& args,
-                                          const std::filesystem::path& out) {
+                                          const std::filesystem::path& out, OutputMode mode) {
   options.check();
   const Rig rig = load_rig(rig_path);
   sim::NaturalCaptureOptions capture;
@@ -74,7 +74,10 @@ nlohmann::json simulate_natural_to_folder(const std::filesystem::path& rig_path,
   if (options.sensor.bit_depth) capture.bit_depth = *options.sensor.bit_depth;
   capture.check();
   const auto start = std::chrono::steady_clock::now();
-  const sim::NaturalCapture natural = sim::simulate_natural(rig, options, capture);
+  Progress progress("simulate", static_cast<std::size_t>(args.frames), "frames", mode);
+  const sim::NaturalCapture natural = sim::simulate_natural(
+      rig, options, capture, [&progress](std::size_t frames) { progress.advance(frames); });
+  progress.finish();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   nlohmann::json simulation = sim::describe(rig, options);
   simulation["lighting"] = "natural";
@@ -211,8 +214,8 @@ void add_simulate(CLI::App& app) {
     const auto start = std::chrono::steady_clock::now();
     nlohmann::json summary;
     if (args->natural.lighting == "natural") {
-      // The natural capture renders in one library call without a progress hook: no progress line.
-      summary = simulate_natural_to_folder(args->rig, args->sim.options, args->natural, args->out);
+      summary = simulate_natural_to_folder(args->rig, args->sim.options, args->natural, args->out,
+                                           args->output.mode());
     } else {
       const Rig rig = load_rig(args->rig);
       Progress progress("simulate", rig.leds.size(), "frames", args->output.mode());

@@ -68,7 +68,8 @@ nlohmann::json NaturalCapture::describe() const {
 }
 
 NaturalCapture capture_natural(const cv::Mat& normals, const cv::Mat& albedo, const cv::Mat& mask,
-                               const NaturalCaptureOptions& options, int threads) {
+                               const NaturalCaptureOptions& options, int threads,
+                               const FrameProgress& on_frames) {
   options.check();
   NaturalCapture out;
   out.lighting = random_natural_lighting(options.lighting);
@@ -115,6 +116,7 @@ NaturalCapture capture_natural(const cv::Mat& normals, const cv::Mat& albedo, co
     out.stack.frames.push_back(std::move(f));
     out.responses.push_back(response);
     out.gains.push_back(gain);
+    if (on_frames) on_frames(1);
   }
   out.stack.mask = mask.clone();
   out.stack.ground_truth = GroundTruth{normals.clone(), {}};
@@ -122,11 +124,11 @@ NaturalCapture capture_natural(const cv::Mat& normals, const cv::Mat& albedo, co
 }
 
 NaturalCapture simulate_natural(const Rig& rig, const SimulateOptions& simulate,
-                                const NaturalCaptureOptions& options) {
+                                const NaturalCaptureOptions& options, const FrameProgress& on_frames) {
   const World world(rig, simulate);
   const Renderer& renderer = world.renderer();
   NaturalCapture out = capture_natural(renderer.ground_truth().normals, renderer.albedo_map(),
-                                       renderer.mask(), options, simulate.threads);
+                                       renderer.mask(), options, simulate.threads, on_frames);
   out.stack.ground_truth->depth = renderer.ground_truth().depth.clone();
   return out;
 }

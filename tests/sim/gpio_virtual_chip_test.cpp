@@ -143,9 +143,9 @@ TEST_F(VirtualChipTest, InitialValuesAreRecordedAtTheRequestTime) {
   EXPECT_TRUE(chip.led_lit(8));
 }
 
-TEST(VirtualChipPolarity, TimelineValuesAreActiveAsTheRigWiresTheLine) {
-  // A trigger wired active-low: the firmware requests it active-low and sets
-  // logical 1; the level goes low and the timeline says the trigger is active.
+// A rig whose trigger is wired active-low, its chip and a firmware connected to it.
+class VirtualChipPolarity : public ::testing::Test {
+ protected:
   const Rig rig = parse_rig(R"(name: low
 dome_radius_mm: 300
 camera: {width: 8, height: 8}
@@ -155,8 +155,13 @@ leds:
   - {id: 1, line: 0, position_mm: [100, 0, 100]}
 )",
                             "low.yaml");
-  VirtualChip chip(layout_from_rig(rig), chip_options_for(rig));
+  VirtualChip chip{layout_from_rig(rig), chip_options_for(rig)};
   const ClientId firmware = chip.connect();
+};
+
+TEST_F(VirtualChipPolarity, TimelineValuesAreActiveAsTheRigWiresTheLine) {
+  // A trigger wired active-low: the firmware requests it active-low and sets
+  // logical 1; the level goes low and the timeline says the trigger is active.
   const std::vector<unsigned> trigger = {2};
   const bool low[] = {true};
   chip.request_lines(firmware, trigger, true, "fw", low, {}, 10);
@@ -169,18 +174,7 @@ leds:
   EXPECT_EQ(chip.stats().triggers, 1);
 }
 
-TEST(VirtualChipPolarity, AFirmwareIgnoringTheRigPolarityShowsInTheTimeline) {
-  const Rig rig = parse_rig(R"(name: low
-dome_radius_mm: 300
-camera: {width: 8, height: 8}
-trigger: {line: {line: 2, active_low: true}}
-led_defaults: {limits: {max_on_us: 1000, max_duty: 0.5}}
-leds:
-  - {id: 1, line: 0, position_mm: [100, 0, 100]}
-)",
-                            "low.yaml");
-  VirtualChip chip(layout_from_rig(rig), chip_options_for(rig));
-  const ClientId firmware = chip.connect();
+TEST_F(VirtualChipPolarity, AFirmwareIgnoringTheRigPolarityShowsInTheTimeline) {
   const std::vector<unsigned> trigger = {2};
   const std::vector<int> initial = {0};
   // Requested active-high with logical 0: the line goes low, i.e. the trigger fires.

@@ -14,9 +14,7 @@
 namespace lightstage {
 
 void MonotonicOptions::check() const {
-  if (!(std::isfinite(shadow_threshold) && shadow_threshold >= 0))
-    fail("MonotonicOptions.shadow_threshold (--shadow-threshold): must be finite and >= 0, got {}",
-         shadow_threshold);
+  detail::check_shadow_threshold("MonotonicOptions", shadow_threshold);
   if (!(infinity > 1 && std::isfinite(infinity)))
     fail("MonotonicOptions.infinity: must be > 1, got {}", infinity);
   if (!(gamma > 0 && gamma <= 20))
@@ -25,9 +23,7 @@ void MonotonicOptions::check() const {
     fail("MonotonicOptions.coarse_step_deg: must be in (0, 10], got {}", coarse_step_deg);
   if (!(fine_step_deg > 0 && fine_step_deg <= coarse_step_deg))
     fail("MonotonicOptions.fine_step_deg: must be in (0, coarse_step_deg], got {}", fine_step_deg);
-  if (min_observations < 3)
-    fail("MonotonicOptions.min_observations (--min-observations): must be at least 3, got {}",
-         min_observations);
+  detail::check_min_observations("MonotonicOptions", min_observations);
   if (!(refine_step_deg >= 0 && refine_step_deg <= 20))
     fail("MonotonicOptions.refine_step_deg: must be in [0, 20], got {}", refine_step_deg);
   if (ring_quantiles.empty()) fail("MonotonicOptions.ring_quantiles: needs at least one ring");
@@ -38,8 +34,7 @@ void MonotonicOptions::check() const {
     fail("MonotonicOptions.ring_samples: must be even and at least 8, got {}", ring_samples);
   if (ring_neighbours < 1)
     fail("MonotonicOptions.ring_neighbours: must be at least 1, got {}", ring_neighbours);
-  if (threads < 0)
-    fail("MonotonicOptions.threads (--threads): must be 0 (automatic) or positive, got {}", threads);
+  detail::check_threads("MonotonicOptions", threads);
 }
 
 nlohmann::json MonotonicOptions::to_json() const {
@@ -289,11 +284,7 @@ SolveResult solve_monotonic(const Observations& observations, const MonotonicOpt
   std::shared_ptr<const RingInterpolation> shared_rings;
   if (!observations.near && observations.lights.rows() > 0)
     shared_rings = std::make_shared<RingInterpolation>(observations.lights, options);
-  detail::DriverSettings settings;
-  settings.method = "monotonic";
-  settings.threads = options.threads;
-  settings.progress = options.progress;
-  settings.drop_saturated = options.drop_saturated;
+  const detail::DriverSettings settings = detail::driver_settings("monotonic", options);
   SolveResult result;
   detail::run_per_pixel(
       observations, settings,

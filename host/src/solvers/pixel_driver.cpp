@@ -1,5 +1,6 @@
 #include "solvers/pixel_driver.hpp"
 
+#include "lightstage/common/error.hpp"
 #include "util/parallel.hpp"
 
 #include <algorithm>
@@ -16,6 +17,21 @@ struct Counters {
 };
 
 }  // namespace
+
+void check_shadow_threshold(const char* owner, double shadow_threshold) {
+  if (!(std::isfinite(shadow_threshold) && shadow_threshold >= 0))
+    fail("{}.shadow_threshold (--shadow-threshold): must be finite and >= 0, got {}", owner,
+         shadow_threshold);
+}
+
+void check_min_observations(const char* owner, int min_observations) {
+  if (min_observations < 3)
+    fail("{}.min_observations (--min-observations): must be at least 3, got {}", owner, min_observations);
+}
+
+void check_threads(const char* owner, int threads) {
+  if (threads < 0) fail("{}.threads (--threads): must be 0 (automatic) or positive, got {}", owner, threads);
+}
 
 double run_per_pixel(const Observations& observations, const DriverSettings& settings,
                      const std::function<PixelCore()>& make_core, SolveResult& result) {

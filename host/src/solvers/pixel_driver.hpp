@@ -10,6 +10,7 @@
 
 #include <functional>
 #include <string>
+#include <utility>
 
 namespace lightstage::detail {
 
@@ -56,6 +57,24 @@ struct DriverSettings {
   int coefficient_count = 0;   // > 0: a CV_32FC(k) coefficient map is written
   SolveProgress progress;      // pixels done; empty = none
 };
+
+// The settings a method's options carry for the driver: threads, progress and
+// drop_saturated (every per-pixel method's options have them).
+template <typename Options>
+DriverSettings driver_settings(std::string method, const Options& options) {
+  DriverSettings settings;
+  settings.method = std::move(method);
+  settings.threads = options.threads;
+  settings.progress = options.progress;
+  settings.drop_saturated = options.drop_saturated;
+  return settings;
+}
+
+// The option checks per-pixel methods share; each throws InputError naming
+// `owner` (the options struct, "RobustOptions"), the field and its flag.
+void check_shadow_threshold(const char* owner, double shadow_threshold);  // finite and >= 0
+void check_min_observations(const char* owner, int min_observations);     // at least 3
+void check_threads(const char* owner, int threads);                       // 0 (automatic) or positive
 
 // Runs `make_core()` once per worker and the core once per pixel. Fills every
 // map of the result (normals, albedo, residual, solved, confidence and, when

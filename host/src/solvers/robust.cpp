@@ -33,9 +33,7 @@ RobustEstimator parse_robust_estimator(const std::string& text) {
 }
 
 void RobustOptions::check() const {
-  if (!(std::isfinite(shadow_threshold) && shadow_threshold >= 0))
-    fail("RobustOptions.shadow_threshold (--shadow-threshold): must be finite and >= 0, got {}",
-         shadow_threshold);
+  detail::check_shadow_threshold("RobustOptions", shadow_threshold);
   if (!(t_low > 0 && t_low <= 1)) fail("RobustOptions.t_low (--t-low): must be in (0, 1], got {}", t_low);
   if (irls_iterations < 1) fail("RobustOptions.irls_iterations: must be at least 1, got {}", irls_iterations);
   if (!(irls_epsilon > 0 && std::isfinite(irls_epsilon)))
@@ -44,10 +42,8 @@ void RobustOptions::check() const {
     fail("RobustOptions.ransac_iterations: must be at least 1, got {}", ransac_iterations);
   if (!(ransac_threshold > 0 && std::isfinite(ransac_threshold)))
     fail("RobustOptions.ransac_threshold: must be positive, got {}", ransac_threshold);
-  if (min_observations < 3)
-    fail("RobustOptions.min_observations (--min-observations): must be at least 3, got {}", min_observations);
-  if (threads < 0)
-    fail("RobustOptions.threads (--threads): must be 0 (automatic) or positive, got {}", threads);
+  detail::check_min_observations("RobustOptions", min_observations);
+  detail::check_threads("RobustOptions", threads);
 }
 
 nlohmann::json RobustOptions::to_json() const {
@@ -187,11 +183,7 @@ RobustPixelFit fit_robust_pixel(const PixelObservations& pixel, const RobustOpti
 
 SolveResult solve_robust(const Observations& observations, const RobustOptions& options) {
   options.check();
-  detail::DriverSettings settings;
-  settings.method = "robust";
-  settings.threads = options.threads;
-  settings.progress = options.progress;
-  settings.drop_saturated = options.drop_saturated;
+  const detail::DriverSettings settings = detail::driver_settings("robust", options);
   SolveResult result;
   detail::run_per_pixel(
       observations, settings,

@@ -6,6 +6,7 @@
 // libcamera completes requests on its own thread: requestCompleted only queues
 // the request; wait_frame() copies the image out on the caller's thread and
 // queues the request again.
+#include "backend_common.hpp"
 #include "libcamera_manager.hpp"
 #include "lightstage/hw/cameras.hpp"
 #include "lightstage/hw/pixel_formats.hpp"
@@ -315,12 +316,7 @@ class LibcameraCamera final : public camera::Camera {
   bool streaming() const override { return streaming_; }
 
   void trigger() override {
-    if (config_.trigger != camera::TriggerMode::Software) {
-      throw CameraError(Kind::Unsupported,
-                        fmt::format("{}: trigger() needs trigger mode software (configured: {})", uri(),
-                                    camera::to_string(config_.trigger)));
-    }
-    if (!streaming_) throw CameraError(fmt::format("{}: trigger() before start()", uri()));
+    check_software_trigger(config_, streaming_, uri());
     trigger_pending_ = true;
     trigger_boottime_ns_ = camera::clock_now_ns(camera::ClockDomain::Boottime);
     trigger_monotonic_ns_ = camera::clock_now_ns(camera::ClockDomain::Monotonic);
@@ -355,14 +351,8 @@ class LibcameraCamera final : public camera::Camera {
   // what changed in `v`; nullptr when impossible.
   std::unique_ptr<libcamera::CameraConfiguration> make_configuration(camera::CameraConfig& config,
                                                                      camera::Validation& v) const {
-    auto adjust = [&](std::string note) {
-      if (v.status == camera::ConfigStatus::Valid) v.status = camera::ConfigStatus::Adjusted;
-      v.notes.push_back(std::move(note));
-    };
-    auto invalid = [&](std::string note) {
-      v.status = camera::ConfigStatus::Invalid;
-      v.notes.push_back(std::move(note));
-    };
+    auto adjust = [&](std::string note) { note_adjusted(v, std::move(note)); };
+    auto invalid = [&](std::string note) { note_invalid(v, std::move(note)); };
     std::unique_ptr<libcamera::CameraConfiguration> lc =
         camera_->generateConfiguration({libcamera::StreamRole::Raw});
     if (!lc || lc->empty()) {
@@ -538,16 +528,8 @@ class LibcameraCamera final : public camera::Camera {
     const Mapping& map = mappings_.at(index);
     const std::size_t used =
         meta.planes().empty() ? map.size : std::min<std::size_t>(meta.planes()[0].bytesused, map.size);
-    try {
-      frame.image = unpack_pixels({map.data, used > 0 ? used : map.size}, config_.size.width,
-                                  config_.size.height, stride_, format_->packing, format_->bit_depth);
-    } catch (const std::invalid_argument& e) {
-      throw CameraError(fmt::format("{}: frame {} is short: {}", uri(), sequence, e.what()));
-    }
-    frame.pixel_format = config_.pixel_format;
-    frame.bit_depth = format_->bit_depth;
-    frame.cfa = format_->cfa;
-    if (config_.roi) camera::crop_frame(frame, *config_.roi, uri());
+    fill_frame_image(frame, {map.data, used > 0 ? used : map.size}, config_, stride_, *format_, uri(),
+                     sequence);
     return frame;
   }
 

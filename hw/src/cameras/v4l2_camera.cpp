@@ -2,6 +2,7 @@
 // streaming. Every system call goes through V4l2Syscalls (v4l2_camera.hpp).
 #include "lightstage/hw/v4l2_camera.hpp"
 
+#include "backend_common.hpp"
 #include "lightstage/hw/cameras.hpp"
 #include "lightstage/hw/pixel_formats.hpp"
 
@@ -130,14 +131,8 @@ class V4l2Camera final : public camera::Camera {
 
   camera::Validation validate(camera::CameraConfig& config) const override {
     camera::Validation v;
-    auto adjust = [&](std::string note) {
-      if (v.status == camera::ConfigStatus::Valid) v.status = camera::ConfigStatus::Adjusted;
-      v.notes.push_back(std::move(note));
-    };
-    auto invalid = [&](std::string note) {
-      v.status = camera::ConfigStatus::Invalid;
-      v.notes.push_back(std::move(note));
-    };
+    auto adjust = [&](std::string note) { note_adjusted(v, std::move(note)); };
+    auto invalid = [&](std::string note) { note_invalid(v, std::move(note)); };
     if (config.pixel_format.empty()) config.pixel_format = config_.pixel_format;
     const auto format = std::find_if(formats_.begin(), formats_.end(), [&](const camera::FormatInfo& f) {
       return f.pixel_format == config.pixel_format;
@@ -309,12 +304,7 @@ class V4l2Camera final : public camera::Camera {
   bool streaming() const override { return streaming_; }
 
   void trigger() override {
-    if (config_.trigger != camera::TriggerMode::Software) {
-      throw CameraError(Kind::Unsupported,
-                        fmt::format("{}: trigger() needs trigger mode software (configured: {})", uri(),
-                                    camera::to_string(config_.trigger)));
-    }
-    if (!streaming_) throw CameraError(fmt::format("{}: trigger() before start()", uri()));
+    check_software_trigger(config_, streaming_, uri());
     trigger_pending_ = true;
     trigger_time_ns_ = camera::clock_now_ns(camera::ClockDomain::Monotonic);
     frames_since_trigger_ = 0;
@@ -672,15 +662,8 @@ class V4l2Camera final : public camera::Camera {
     const std::size_t used =
         buf.bytesused > 0 ? std::min<std::size_t>(buf.bytesused, mem.length) : mem.length;
     camera::Frame frame;
-    try {
-      frame.image = unpack_pixels({static_cast<const std::uint8_t*>(mem.data), used}, config_.size.width,
-                                  config_.size.height, stride_, format_->packing, format_->bit_depth);
-    } catch (const std::invalid_argument& e) {
-      throw CameraError(fmt::format("{}: frame {} is short: {}", uri(), sequence, e.what()));
-    }
-    frame.pixel_format = config_.pixel_format;
-    frame.bit_depth = format_->bit_depth;
-    frame.cfa = format_->cfa;
+    fill_frame_image(frame, {static_cast<const std::uint8_t*>(mem.data), used}, config_, stride_, *format_,
+                     uri(), sequence);
     frame.sequence = sequence;
     frame.timestamp_ns = ts;
     frame.clock = clock;
@@ -688,7 +671,6 @@ class V4l2Camera final : public camera::Camera {
     frame.exposure_us = exposure_us_;
     frame.analogue_gain = gain_;
     frame.controls_reported = false;
-    if (config_.roi) camera::crop_frame(frame, *config_.roi, uri());
     return frame;
   }
 

@@ -72,13 +72,15 @@ struct NaturalCapture {
 };
 
 // Renders the scene of `simulate` (its shape, albedo and camera on `rig`)
-// under natural lighting through the uncontrolled camera.
+// under natural lighting through the uncontrolled camera; `on_frames` hears
+// of each image as it is done.
 NaturalCapture simulate_natural(const Rig& rig, const SimulateOptions& simulate,
-                                const NaturalCaptureOptions& options);
+                                const NaturalCaptureOptions& options, const FrameProgress& on_frames = {});
 
 // The same from ground-truth maps directly.
 NaturalCapture capture_natural(const cv::Mat& normals, const cv::Mat& albedo, const cv::Mat& mask,
-                               const NaturalCaptureOptions& options, int threads = 0);
+                               const NaturalCaptureOptions& options, int threads = 0,
+                               const FrameProgress& on_frames = {});
 
 // Depth-prior corruption of the dissertation's Fig. 4.5: depth normalised to
 // [0, 1] over the mask, quantised to `bits`, Gaussian noise of `noise_sigma`
