@@ -12,9 +12,9 @@
 namespace lightstage::cli {
 
 void add_shape_prior_flags(CLI::App& sub, ShapePriorArgs& args) {
-  sub.add_option(
-      "--prior", args.prior,
-      "shape-prior: coarse depth (16-bit PNG, PFM, or a PLY mesh in the camera frame; docs/surfaces.md)");
+  sub.add_option("--prior", args.prior,
+                 "shape-prior: coarse depth (16-bit PNG, PFM, single-channel EXR, or a PLY mesh in the "
+                 "camera frame; docs/surfaces.md)");
   sub.add_option(
       "--intrinsics", args.intrinsics,
       "shape-prior: 3x3 intrinsics (K.txt) of a perspective camera; without it the camera is orthographic");
@@ -36,7 +36,7 @@ void add_shape_prior_flags(CLI::App& sub, ShapePriorArgs& args) {
 }
 
 SolveResult solve_shape_prior_method(const Observations& obs, const ShapePriorArgs& args) {
-  if (args.prior.empty()) fail("--method shape-prior needs --prior DEPTH (a depth PNG, PFM or PLY)");
+  if (args.prior.empty()) fail("--method shape-prior needs --prior DEPTH (a depth PNG, PFM, EXR or PLY)");
   const surface::CameraModel camera =
       args.intrinsics.empty()
           ? surface::CameraModel::orthographic(obs.size, args.pixel_mm)
