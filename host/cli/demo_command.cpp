@@ -37,7 +37,8 @@ void add_demo(CLI::App& app) {
       "\n"
       "Example: lightstage demo --out out/demo --scene bunny --method robust");
   sub->add_option("--rig", args->rig, "rig description (YAML)")->capture_default_str();
-  sub->add_option("--out", args->demo.out, "output folder")->capture_default_str();
+  sub->add_option("--out", args->demo.out, "output folder (what an earlier demo wrote there is replaced)")
+      ->capture_default_str();
   sub->add_option("--scene", args->demo.scene,
                   "the object: a scene preset or scene YAML (docs/scene-format.md)")
       ->capture_default_str();

@@ -58,7 +58,7 @@ class SocketFolder {
 };
 
 struct Stage {
-  std::string name;      // "chrome-left", "object": the log folder's and the socket folder's name
+  std::string name;      // "chrome-1", "object": the log folder's and the socket folder's name
   std::string scene;     // lightstage-sim --scene
   std::string material;  // lightstage-sim --material ("" = the scene's)
   fs::path stack;        // where the capture goes
@@ -86,6 +86,9 @@ class DomeDemo {
 
   nlohmann::json run() {
     const auto start = Clock::now();
+    // A demo starts afresh: what an earlier run wrote here goes (only what the demo writes).
+    for (const char* written : {"scenes", "calibration", "capture", "result", "surface", "dome", "demo.json"})
+      fs::remove_all(o_.out / written);
     fs::create_directories(o_.out);
     summary_ = {{"rig", o_.rig.string()}, {"scene", o_.scene}, {"method", o_.method_name}};
 
