@@ -110,6 +110,10 @@ std::optional<int> ChildProcess::wait(std::chrono::milliseconds timeout) {
       exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
       break;
     }
+    if (r < 0 && errno == ECHILD) {
+      exit_code_ = -1;  // reaped elsewhere: gone, its status unknown
+      break;
+    }
     if (std::chrono::steady_clock::now() >= deadline) return std::nullopt;
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }

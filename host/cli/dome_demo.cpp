@@ -246,7 +246,11 @@ class DomeDemo {
     SolveCalibration calibration;
     calibration.file = calibration_file;
     const auto start = Clock::now();
-    const SolveReport solved = solve_folder(stack, RadiometryOptions{}, o_.solver, result, calibration);
+    // No clamp at 1: values are normalised to the rig's nominal exposure, and
+    // an LED exposed shorter than that legitimately reads above 1.
+    RadiometryOptions radiometry;
+    radiometry.clamp_to_one = false;
+    const SolveReport solved = solve_folder(stack, radiometry, o_.solver, result, calibration);
     summary_["solve"] = {{"folder", result.string()}, {"seconds", seconds_since(start)}};
     if (solved.error) summary_["solve"]["error_vs_ground_truth"] = solved.error->to_json();
     say(fmt::format("solved with {} and the calibrated near lights in {:.1f} s -> {}", o_.method_name,

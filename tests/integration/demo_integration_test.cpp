@@ -13,6 +13,8 @@
 #include <sstream>
 #include <thread>
 
+#include <unistd.h>
+
 namespace lightstage::testing {
 namespace {
 
@@ -38,7 +40,8 @@ std::vector<std::string> processes_mentioning(const std::string& text) {
 
 // A copy of the default rig at a path unique to the test, to find its programs by.
 fs::path unique_rig(const fs::path& dir) {
-  const fs::path rig = dir / "demo-rig.yaml";
+  // Named by our pid too: an earlier aborted run's programs must not count.
+  const fs::path rig = dir / ("demo-rig-" + std::to_string(::getpid()) + ".yaml");
   fs::copy_file(source_dir() / "hw/rigs/sim-dome.yaml", rig, fs::copy_options::overwrite_existing);
   return rig;
 }
@@ -91,10 +94,12 @@ TEST(DemoIntegration, AKilledDemoTakesItsDomeWithIt) {
                     dir / "demo.log");
   // Wait until the dome runs (the first capture is under way).
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (processes_mentioning(rig.string()).size() < 3 && std::chrono::steady_clock::now() < deadline) {
+  std::vector<std::string> seen = processes_mentioning(rig.string());
+  while (seen.size() < 3 && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    seen = processes_mentioning(rig.string());
   }
-  ASSERT_GE(processes_mentioning(rig.string()).size(), 3u) << demo.output();
+  ASSERT_GE(seen.size(), 3u) << demo.output();
   demo.signal(SIGKILL);
   ASSERT_TRUE(demo.wait(std::chrono::seconds(10)).has_value());
   // The children were told (parent-death signal) and stop; the dome goes dark on its way out.

@@ -274,9 +274,19 @@ Batch CaptureRun::run_software_batch(const std::vector<Shot>& shots) {
     std::vector<std::pair<std::uint32_t, float>> leds;
     if (shots[i].led_id >= 0) leds.emplace_back(static_cast<std::uint32_t>(shots[i].led_id), 1.0f);
     controller_.set_leds(leds);
-    cam_.trigger();
     const Clock::time_point asked = Clock::now();
-    auto frame = cam_.wait_frame(timeout);
+    std::optional<camera::Frame> frame;
+    try {
+      cam_.trigger();
+      frame = cam_.wait_frame(timeout);
+    } catch (...) {
+      // A camera error must not leave the LED lit until the watchdog notices.
+      try {
+        controller_.all_off();
+      } catch (...) {
+      }
+      throw;
+    }
     batch.camera_wait_seconds += seconds_since(asked);
     controller_.all_off();
     if (frame) batch.taken[i] = Taken{std::move(*frame), {}};
@@ -430,7 +440,8 @@ void CaptureRun::add_hdr_frame(std::size_t plan_index, const std::vector<std::pa
     details.push_back(std::move(detail));
   }
   HdrMergeOptions merge_options;
-  merge_options.saturation_dn = kClippedShare * full_scale(bracket.front().second.frame);
+  merge_options.sensor_full_scale = full_scale(bracket.front().second.frame);
+  merge_options.saturation_dn = kClippedShare * merge_options.sensor_full_scale;
   merge_options.response = response_ ? &*response_ : nullptr;
   const HdrMerge merged = merge_hdr(samples, merge_options);
   for (std::size_t i = 0; i < details.size(); ++i) details[i]["clipped_values"] = merged.clipped[i];

@@ -19,8 +19,8 @@ struct SampleView {
 };
 
 template <typename T>
-void merge_values(const std::vector<SampleView>& samples, double full, double saturation_dn,
-                  const std::vector<float>* table, HdrMerge& out) {
+void merge_values(const std::vector<SampleView>& samples, double full, double sensor_full,
+                  double saturation_dn, const std::vector<float>* table, HdrMerge& out) {
   const cv::Mat& first = *samples.front().image;
   const int values_per_row = first.cols * first.channels();
   const auto level = static_cast<float>(out.saturation_level);
@@ -44,7 +44,7 @@ void merge_values(const std::vector<SampleView>& samples, double full, double sa
           longest = s.seconds;
           longest_value = linear / s.seconds;
         }
-        const double z = raw / full;
+        const double z = raw / sensor_full;  // where in the sensor's own range (12-bit in 16-bit words)
         const double hat = std::max(0.0, std::min(z, 1.0 - z));
         weighted += hat * linear;
         weights += hat * s.seconds;
@@ -96,7 +96,8 @@ HdrMerge merge_hdr(const std::vector<HdrSample>& samples, const HdrMergeOptions&
     views.push_back(std::move(view));
   }
   const double full = type_full_scale(first.depth());
-  const double saturation_dn = options.saturation_dn > 0 ? options.saturation_dn : 0.98 * full;
+  const double sensor_full = options.sensor_full_scale > 0 ? options.sensor_full_scale : full;
+  const double saturation_dn = options.saturation_dn > 0 ? options.saturation_dn : 0.98 * sensor_full;
   std::vector<float> table;
   if (options.response != nullptr) {
     table.resize(static_cast<std::size_t>(full) + 1);
@@ -113,9 +114,9 @@ HdrMerge merge_hdr(const std::vector<HdrSample>& samples, const HdrMergeOptions&
   out.clipped.assign(samples.size(), 0);
   const std::vector<float>* t = table.empty() ? nullptr : &table;
   if (first.depth() == CV_8U) {
-    merge_values<std::uint8_t>(views, full, saturation_dn, t, out);
+    merge_values<std::uint8_t>(views, full, sensor_full, saturation_dn, t, out);
   } else {
-    merge_values<std::uint16_t>(views, full, saturation_dn, t, out);
+    merge_values<std::uint16_t>(views, full, sensor_full, saturation_dn, t, out);
   }
   return out;
 }

@@ -51,6 +51,7 @@ void SimulatedDome::start_firmware() {
   std::vector<std::string> args = {"--rig",    options_.rig.string(), "--gpio", "sim:" + sim_socket_.string(),
                                    "--listen", controller_uri()};
   args.insert(args.end(), options_.firmware_args.begin(), options_.firmware_args.end());
+  if (firmware_) firmware_->terminate(std::chrono::seconds(10));  // SIGTERM first: it darkens its lines
   firmware_.reset();
   firmware_ = std::make_unique<ChildProcess>(
       program("lightstage-domed"), args, options_.log_dir / fmt::format("domed-{}.log", ++firmware_starts_));

@@ -15,7 +15,9 @@ namespace lightstage {
 
 class ChildProcess {
  public:
-  // Starts `program` with `args`; output goes to `log`. Throws Error when it cannot start.
+  // Starts `program` with `args`; output goes to `log`. Throws Error when it
+  // cannot start. The child gets SIGTERM when the thread that started it ends
+  // (PR_SET_PDEATHSIG): start children from the main thread.
   ChildProcess(const std::filesystem::path& program, const std::vector<std::string>& args,
                std::filesystem::path log);
   // Kills (SIGKILL) and reaps the child if it still runs.
@@ -26,7 +28,8 @@ class ChildProcess {
   // Waits until the log contains `text`; false if the child exits or time runs out first.
   bool wait_for_output(const std::string& text, std::chrono::milliseconds timeout) const;
   void signal(int signal_number) const;
-  // The exit code (128 + signal when killed by one), or nullopt if still running after `timeout`.
+  // The exit code (128 + signal when killed by one; -1 when reaped elsewhere),
+  // or nullopt if still running after `timeout`.
   std::optional<int> wait(std::chrono::milliseconds timeout);
   // SIGTERM, then SIGKILL when it has not exited within `grace`; returns the exit code.
   int terminate(std::chrono::milliseconds grace);

@@ -6,7 +6,7 @@
 //   linear_i = (raw_i − dark_i) / full_scale        linear camera
 //            = response(raw_i) − dark_i             camera with an inverse response
 //                                                    (the dark already linearised)
-//   w_i      = hat(raw_i / full_scale) · t_i        hat(z) = min(z, 1 − z); 0 when clipped
+//   w_i      = hat(raw_i / sensor_full)            hat(z) = min(z, 1 − z); 0 when clipped
 //   merged   = Σ w_i · linear_i / Σ w_i · t_i        (t in seconds)
 //
 // i.e. a weighted mean of linear_i / t_i with weights hat · t: well-exposed
@@ -41,7 +41,8 @@ struct HdrSample {
 };
 
 struct HdrMergeOptions {
-  double saturation_dn = 0;                   // raw values at or above are clipped; 0 = 0.98 · type maximum
+  double saturation_dn = 0;      // raw values at or above are clipped; 0 = 0.98 · sensor_full_scale
+  double sensor_full_scale = 0;  // the sensor's largest raw value (2^bits − 1); 0 = the type's
   const InverseResponse* response = nullptr;  // set for cameras that are not linear
 
   void check() const;  // throws InputError naming the field
