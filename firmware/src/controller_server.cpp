@@ -6,6 +6,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
+#include <chrono>
 
 namespace lightstage::firmware {
 namespace {
@@ -51,7 +53,13 @@ void ControllerServer::refuse_extra_client(LinkListener& listener) {
   try {
     MessageChannel channel(std::move(extra));
     channel.send(error_reply(0, proto::Error::BUSY, "another host controls this dome; try again later"));
-    channel.link().shutdown();
+    // Closing with the host's hello still unread would reset its connection
+    // and lose the BUSY reply on its side: take what it sends until it hangs
+    // up (it does on BUSY), for a moment at most.
+    std::array<std::uint8_t, 256> unread{};
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
+    while (std::chrono::steady_clock::now() < deadline)
+      channel.link().read(unread, std::chrono::milliseconds(20));
   } catch (const std::exception& e) {
     logger("firmware")->debug("refusing a second client: {}", e.what());
   }
