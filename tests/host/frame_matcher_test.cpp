@@ -17,8 +17,8 @@ TEST(FrameMatcher, StartOfExposureStampsFollowTheirTrigger) {
   const auto steps = steps_every(20'000'000, 5, 10'000);
   std::vector<FrameTiming> frames;
   for (int i = 0; i < 5; ++i) {
-    frames.push_back({steps[static_cast<std::size_t>(i)].trigger_ns + 100'000, TimestampPoint::StartOfExposure,
-                      static_cast<std::uint64_t>(i)});
+    frames.push_back({steps[static_cast<std::size_t>(i)].trigger_ns + 100'000,
+                      TimestampPoint::StartOfExposure, static_cast<std::uint64_t>(i)});
   }
   std::swap(frames[1], frames[3]);  // arrival order does not matter
   const FrameMatch m = match_frames(steps, frames);

@@ -27,6 +27,24 @@ std::vector<double> ticks(double high, int count) {
   return out;
 }
 
+// The x axis, both axis labels and the end of a chart's SVG.
+struct ChartFrame {
+  int width, height, left, right, top;
+  double plot_w, plot_h;
+};
+std::string close_chart(const ChartFrame& f, const std::string& x_label, const std::string& y_label) {
+  std::string svg = fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"#1d232b\"/>",
+                                f.left, f.top + f.plot_h, f.width - f.right);
+  svg += fmt::format(
+      "<text x=\"{}\" y=\"{}\" font-size=\"12\" fill=\"#1d232b\" text-anchor=\"middle\">{}</text>",
+      f.left + f.plot_w / 2, f.height - 6, escape_html(x_label));
+  svg += fmt::format(
+      "<text transform=\"translate(14 {}) rotate(-90)\" font-size=\"12\" fill=\"#1d232b\" "
+      "text-anchor=\"middle\">{}</text>\n</svg>\n",
+      f.top + f.plot_h / 2, escape_html(y_label));
+  return svg;
+}
+
 }  // namespace
 
 std::string hemisphere_svg(const std::vector<LightSeries>& series, bool link_first_two, int size) {
@@ -168,15 +186,7 @@ std::string histogram_svg(const std::vector<float>& values, double high, int bin
   svg += fmt::format(
       "<text x=\"{:.1f}\" y=\"{}\" font-size=\"11\" fill=\"#c2410c\" text-anchor=\"middle\">≥</text>\n",
       left + plot_w - bar_w / 2, top + plot_h + 16);
-  svg += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"#1d232b\"/>", left,
-                     top + plot_h, width - right);
-  svg += fmt::format(
-      "<text x=\"{}\" y=\"{}\" font-size=\"12\" fill=\"#1d232b\" text-anchor=\"middle\">{}</text>",
-      left + plot_w / 2, height - 6, escape_html(x_label));
-  svg += fmt::format(
-      "<text transform=\"translate(14 {}) rotate(-90)\" font-size=\"12\" fill=\"#1d232b\" "
-      "text-anchor=\"middle\">pixels</text>\n</svg>\n",
-      top + plot_h / 2);
+  svg += close_chart({width, height, left, right, top, plot_w, plot_h}, x_label, "pixels");
   return svg;
 }
 
@@ -222,15 +232,7 @@ std::string bar_chart_svg(const std::vector<double>& values, double high, const 
         "<text x=\"{:.1f}\" y=\"{}\" font-size=\"11\" fill=\"#5d6673\" text-anchor=\"middle\">{}</text>",
         left + (static_cast<double>(i) + 0.5) * bar_w, top + plot_h + 14, i + 1);
   }
-  svg += fmt::format("<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"#1d232b\"/>", left,
-                     top + plot_h, width - right);
-  svg += fmt::format(
-      "<text x=\"{}\" y=\"{}\" font-size=\"12\" fill=\"#1d232b\" text-anchor=\"middle\">{}</text>",
-      left + plot_w / 2, height - 6, escape_html(x_label));
-  svg += fmt::format(
-      "<text transform=\"translate(14 {}) rotate(-90)\" font-size=\"12\" fill=\"#1d232b\" "
-      "text-anchor=\"middle\">{}</text>\n</svg>\n",
-      top + plot_h / 2, escape_html(y_label));
+  svg += close_chart({width, height, left, right, top, plot_w, plot_h}, x_label, y_label);
   return svg;
 }
 

@@ -55,13 +55,7 @@ SurfaceResult fuse_depth_normals(const cv::Mat& prior, const cv::Mat& prior_vali
     }
   }
   if (used == 0) fail("fuse: no pixel of the mask has a valid prior depth");
-  SurfaceSolveOptions s;
-  s.reweight = options.preserve_discontinuities;
-  s.reweight_iterations = options.reweight_iterations;
-  s.scale = options.discontinuity_scale;
-  s.tolerance = options.tolerance;
-  s.max_iterations = options.max_iterations;
-  s.progress = progress;
+  const SurfaceSolveOptions s = SurfaceSolveOptions::from(options, progress);
   SurfaceResult result;
   const cv::Mat w = solve_surface(field, weight, w_prior, s, result.stats);
   result.depth = cv::Mat::zeros(normals.size(), CV_32FC1);

@@ -29,6 +29,19 @@ struct SurfaceSolveOptions {
   double tolerance = 1e-7;
   int max_iterations = 1000;
   SurfaceProgress progress;  // integration.hpp; empty = none
+
+  // From IntegrationOptions or FusionOptions (the same solver flags).
+  template <typename Options>
+  static SurfaceSolveOptions from(const Options& options, const SurfaceProgress& progress) {
+    SurfaceSolveOptions s;
+    s.reweight = options.preserve_discontinuities;
+    s.reweight_iterations = options.reweight_iterations;
+    s.scale = options.discontinuity_scale;
+    s.tolerance = options.tolerance;
+    s.max_iterations = options.max_iterations;
+    s.progress = progress;
+    return s;
+  }
 };
 
 // Least squares over the field's edges plus data_weight·(w − w_prior)² where

@@ -115,13 +115,7 @@ SurfaceResult integrate_normals(const cv::Mat& normals, const cv::Mat& mask, con
     result.stats.pixels = static_cast<std::size_t>(cv::countNonZero(field.inside));
     if (progress) progress(1.0);  // one direct solve
   } else {
-    SurfaceSolveOptions s;
-    s.reweight = options.preserve_discontinuities;
-    s.reweight_iterations = options.reweight_iterations;
-    s.scale = options.discontinuity_scale;
-    s.tolerance = options.tolerance;
-    s.max_iterations = options.max_iterations;
-    s.progress = progress;
+    const SurfaceSolveOptions s = SurfaceSolveOptions::from(options, progress);
     w = solve_surface(field, {}, {}, s, result.stats);
   }
   // Fix the free constant: mean 0 (orthographic) or the requested mean depth (perspective).
