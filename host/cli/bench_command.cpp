@@ -79,6 +79,9 @@ void add_bench(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--refine-step", args->sweep.refine_step_deg, "monotonic: 2-D refinement step (0 = off)")
       ->capture_default_str();
+  sub->add_option("--plateau-tolerance", args->sweep.plateau_tolerance,
+                  "monotonic and auto: lowest elevation within (1 + T) x the minimum cost (0 = the minimum)")
+      ->capture_default_str();
   sub->add_option("--auto-agreement", args->sweep.auto_agreement_deg,
                   "auto: answers closer than this are averaged")
       ->capture_default_str();

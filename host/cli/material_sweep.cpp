@@ -101,6 +101,7 @@ SolveResult run_method(const std::string& name, const Observations& obs,
   args.automatic.agreement_deg = options.auto_agreement_deg;
   args.automatic.monotonic_margin = options.auto_margin;
   args.monotonic.refine_step_deg = args.automatic.monotonic.refine_step_deg = options.refine_step_deg;
+  args.monotonic.plateau_tolerance = options.plateau_tolerance;
   args.threads = options.threads;
   args.resolve();
   args.robust.t_low = RobustOptions{}.t_low;  // the robust method keeps its own selection
@@ -247,6 +248,11 @@ nlohmann::json MaterialSweepResult::to_json() const {
   j["light_counts"] = options.light_counts;
   j["noise"] = options.noise;
   j["t_low"] = options.t_low;
+  j["azimuth_from"] = options.azimuth_from;
+  j["refine_step_deg"] = options.refine_step_deg;
+  j["plateau_tolerance"] = options.plateau_tolerance;
+  j["auto_agreement_deg"] = options.auto_agreement_deg;
+  j["auto_margin"] = options.auto_margin;
   j["seed"] = options.seed;
   j["threads"] = options.threads;
   j["errors_deg"] = errors;

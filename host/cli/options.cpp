@@ -102,6 +102,10 @@ void add_solve_flags(CLI::App& sub, SolveArgs& args) {
       ->capture_default_str();
   sub.add_option("--gamma", args.monotonic.gamma, "monotonic: y' <- y'^gamma before the cost")
       ->capture_default_str();
+  sub.add_option("--plateau-tolerance", args.monotonic.plateau_tolerance,
+                 "monotonic and auto: take the lowest elevation whose cost is within (1 + T) x the minimum "
+                 "(0 = the plain minimum, as published)")
+      ->capture_default_str();
   sub.add_flag("--no-clamp", args.no_clamp, "do not clamp normalised values to <= 1");
   sub.add_option("--threads", args.threads, "solver threads (0 = all cores)");
   add_shape_prior_flags(sub, args.shape_prior);
@@ -127,6 +131,7 @@ void SolveArgs::resolve() {
     l2.min_observations = robust.min_observations = monotonic.min_observations = *min_observations;
   if (max_iterations) bipolynomial.max_iterations = a.bipolynomial.max_iterations = *max_iterations;
   a.monotonic.gamma = monotonic.gamma;
+  a.monotonic.plateau_tolerance = monotonic.plateau_tolerance;
   if (threads) l2.threads = robust.threads = monotonic.threads = bipolynomial.threads = a.threads = *threads;
 }
 
