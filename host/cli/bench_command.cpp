@@ -63,6 +63,9 @@ void add_bench(CLI::App& app) {
       "per-material error plot materials.png.\n"
       "\n"
       "Example: lightstage bench materials --lights 100 --noise none,0,0.05,0.15,0.3 --out out/sweep");
+  sub->add_option("--light-cone", args->sweep.light_cone_deg,
+                  "lights within DEG of the view axis (90: the whole hemisphere; DiLiGenT's span 43)")
+      ->capture_default_str();
   sub->add_option("--lights", args->sweep.light_counts, "light counts, e.g. 25,50,100,200")
       ->delimiter(',')
       ->capture_default_str();

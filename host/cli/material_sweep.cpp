@@ -28,8 +28,10 @@ std::string noise_label(double lambda) {
   return lambda < 0 ? std::string("no noise") : fmt::format("lambda={:g}", lambda);
 }
 
-// Uniform directions on the upper hemisphere (z > 0.05: a light at the horizon lights nothing).
-Eigen::MatrixX3d random_lights(int count, std::uint64_t seed) {
+// Uniform directions on the upper hemisphere (z > 0.05: a light at the horizon lights nothing),
+// or within `cone_deg` of the view axis when that is below 90.
+Eigen::MatrixX3d random_lights(int count, double cone_deg, std::uint64_t seed) {
+  const double min_z = cone_deg < 90 ? std::cos(rad_from_deg(cone_deg)) : 0.05;
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> gauss;
   Eigen::MatrixX3d lights(count, 3);
@@ -38,7 +40,7 @@ Eigen::MatrixX3d random_lights(int count, std::uint64_t seed) {
     if (v.norm() < 1e-9) continue;
     v.normalize();
     v.z() = std::abs(v.z());
-    if (v.z() < 0.05) continue;
+    if (v.z() < min_z) continue;
     lights.row(j++) = v.transpose();
   }
   return lights;
@@ -155,6 +157,8 @@ void MaterialSweepOptions::check() const {
       fail("--noise: each lambda must be in [0, 1] (or 'none'), got {}", l);
   }
   if (!(t_low > 0 && t_low <= 1)) fail("--t-low: must be in (0, 1], got {}", t_low);
+  if (!(light_cone_deg >= 20 && light_cone_deg <= 90))
+    fail("--light-cone: must be in [20, 90] degrees, got {}", light_cone_deg);
   if (threads < 0) fail("--threads: must be 0 (automatic) or positive, got {}", threads);
 }
 
@@ -181,7 +185,8 @@ MaterialSweepResult run_material_sweep(const MaterialSweepOptions& given,
                            options.noise.size(), std::vector<std::vector<double>>(
                                                      materials.size(), std::vector<double>(methods, 0.0))));
   for (std::size_t li = 0; li < options.light_counts.size(); ++li) {
-    const Eigen::MatrixX3d lights = random_lights(options.light_counts[li], options.seed);
+    const Eigen::MatrixX3d lights =
+        random_lights(options.light_counts[li], options.light_cone_deg, options.seed);
     for (std::size_t ni = 0; ni < options.noise.size(); ++ni) {
       for (std::size_t mi = 0; mi < materials.size(); ++mi) {
         const SweepScene scene =
@@ -241,13 +246,15 @@ std::string MaterialSweepResult::material_table(std::size_t li, std::size_t ni) 
 nlohmann::json MaterialSweepResult::to_json() const {
   nlohmann::json j;
   j["protocol"] =
-      "1620 normals (36 azimuths x 45 elevations), random hemisphere lights, values / max, "
+      "1620 normals (36 azimuths x 45 elevations), random lights over the hemisphere (or within "
+      "light_cone_deg of the view axis), values / max, "
       "y + lambda*y*X then 16-bit quantisation (lambda -1: none)";
   j["materials"] = options.materials;
   j["methods"] = options.methods;
   j["light_counts"] = options.light_counts;
   j["noise"] = options.noise;
   j["t_low"] = options.t_low;
+  j["light_cone_deg"] = options.light_cone_deg;
   j["azimuth_from"] = options.azimuth_from;
   j["refine_step_deg"] = options.refine_step_deg;
   j["plateau_tolerance"] = options.plateau_tolerance;

@@ -24,6 +24,7 @@ struct MaterialSweepOptions {
   std::vector<std::string> materials;  // sim material presets; empty = default_sweep_materials()
   std::vector<std::string> methods;    // solve methods + "lambert-low"; empty = default_sweep_methods()
   std::vector<int> light_counts = {100};
+  double light_cone_deg = 90;  // lights within this angle of the view axis (90: the hemisphere)
   std::vector<double> noise = {-1, 0, 0.05, 0.15, 0.3};  // λ; −1 = no noise, no quantisation
   double t_low = 0.25;                                   // bi-polynomial, auto and lambert-low
   // monotonic's --azimuth-from: a robust Lambertian normal's azimuth. Sweep means, no noise / λ = 0.15:

@@ -65,6 +65,7 @@ struct SolveArgs {
   // Flags every method shares: when given, resolve() copies them into each method's options.
   std::optional<double> shadow_threshold, t_low;
   std::optional<int> min_observations, threads, max_iterations;
+  std::vector<double> start_band;  // --start-band LOW,HIGH: bi-polynomial and auto (empty = the T_low set)
   RadiometryOptions radiometry;
   bool no_clamp = false;
   void resolve();

@@ -239,12 +239,19 @@ TEST(Options, ErrorsNameTheFieldAndValue) {
   b = {};
   b.t_low = 0;
   EXPECT_NE(error_of([&] { b.check(); }).find("--t-low"), std::string::npos);
+  b = {};
+  b.start_band_low = 0.5;
+  b.start_band_high = 0.2;
+  EXPECT_NE(error_of([&] { b.check(); }).find("--start-band"), std::string::npos);
   RobustOptions r;
   r.min_observations = 2;
   EXPECT_NE(error_of([&] { r.check(); }).find("min_observations"), std::string::npos);
   MonotonicOptions m;
   m.gamma = -1;
   EXPECT_NE(error_of([&] { m.check(); }).find("gamma"), std::string::npos);
+  m = {};
+  m.plateau_tolerance = -1;
+  EXPECT_NE(error_of([&] { m.check(); }).find("--plateau-tolerance"), std::string::npos);
   EXPECT_NE(error_of([] { parse_robust_estimator("huber"); }).find("huber"), std::string::npos);
   const auto scene = make_reflectance_scene("lambert", hemisphere_lights(20, 1), 2, 2);
   EXPECT_NE(

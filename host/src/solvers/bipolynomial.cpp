@@ -22,6 +22,12 @@ void BiPolynomialOptions::check() const {
   if (!(std::isfinite(shadow_threshold) && shadow_threshold >= 0))
     fail("BiPolynomialOptions.shadow_threshold (--shadow-threshold): must be finite and >= 0, got {}",
          shadow_threshold);
+  if (!(start_band_high == 0 && start_band_low == 0) &&
+      !(start_band_low >= 0 && start_band_low < start_band_high && start_band_high <= 1))
+    fail(
+        "BiPolynomialOptions.start_band (--start-band): need 0 <= LOW < HIGH <= 1 (or 0,0 = the T_low set), "
+        "got {},{}",
+        start_band_low, start_band_high);
   if (max_iterations < 1)
     fail("BiPolynomialOptions.max_iterations (--max-iterations): must be at least 1, got {}", max_iterations);
   if (!(tolerance >= 0 && std::isfinite(tolerance)))
@@ -35,6 +41,7 @@ nlohmann::json BiPolynomialOptions::to_json() const {
           {"model", bipolynomial_name(order)},
           {"t_low", t_low},
           {"shadow_threshold", shadow_threshold},
+          {"start_band", {start_band_low, start_band_high}},
           {"max_iterations", max_iterations},
           {"tolerance", tolerance},
           {"drop_saturated", drop_saturated},
@@ -98,8 +105,22 @@ BiPolynomialPixelFit fit_bipolynomial_pixel(const PixelObservations& pixel,
   for (Eigen::Index j = 0; j < images; ++j)
     ws.halves.row(j) = (pixel.lights.row(j) + Eigen::RowVector3d(0, 0, 1)).normalized();
 
+  // Initial normal: Lambert on the T_low set, or on the start band (see the header).
+  const std::vector<Eigen::Index>* initial = &ws.kept;
+  if (options.start_band_high > 0) {
+    const std::size_t lit = ws.candidates.size();
+    const auto end = std::clamp(
+        static_cast<std::size_t>(std::ceil(options.start_band_high * static_cast<double>(lit) - 1e-9)),
+        needed, lit);
+    const auto begin =
+        std::min(static_cast<std::size_t>(std::floor(options.start_band_low * static_cast<double>(lit))),
+                 end - needed);
+    ws.initial.assign(ws.candidates.begin() + static_cast<std::ptrdiff_t>(begin),
+                      ws.candidates.begin() + static_cast<std::ptrdiff_t>(end));
+    initial = &ws.initial;
+  }
   Eigen::Vector3d s;
-  if (!detail::lambert_fit(pixel.lights, pixel.values, ws.kept, s) || s.norm() < 1e-12) return fit;
+  if (!detail::lambert_fit(pixel.lights, pixel.values, *initial, s) || s.norm() < 1e-12) return fit;
   Eigen::Vector3d n = s.normalized();
 
   Eigen::VectorXd coefficients;
