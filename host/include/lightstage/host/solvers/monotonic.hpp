@@ -15,10 +15,11 @@
 //  3. beyond the dissertation: δ is one-sided around the true θ. Below it, lit
 //     observations near the terminator go behind the hypothesised surface (or
 //     their y' explodes) and δ rises steeply; above it, the diffuse part of the
-//     profile stays nearly monotonic and δ barely grows. With noise, the argmin
-//     drifts up that plateau (a Lambertian sphere at λ = 0.05: +1.3° on
-//     average). So from the argmin, θ descends while δ stays within
-//     (1 + plateau_tolerance) × δ_min, the noise level of the best hypothesis.
+//     profile stays nearly monotonic and δ barely grows — with noise it even
+//     falls on average. So the argmin drifts up that plateau (the sweep's
+//     Lambertian sphere at λ = 0.05: +1.3° on average), and from it θ
+//     descends while δ stays within (1 + plateau_tolerance) × δ_min, the noise
+//     level of the best hypothesis (docs/solvers.md has the measurements).
 // Outputs: normal, albedo = median of i_j / (n·l_j) over lit observations,
 // residual = δ at the minimum (in y'^γ units), confidence = the fraction of
 // consecutive pairs (sorted by n·h) whose profile i/(n·l) does not decrease.
@@ -45,7 +46,7 @@ struct MonotonicOptions {
   // the best cost, which noise alone reaches); 0 = the argmin, as published.
   // On the material sweep (100 lights, 21 materials), mean error with no
   // noise / λ = 0.05 / 0.15 / 0.3: argmin 1.66 / 3.67 / 5.68 / 7.28°;
-  // 0.5: 1.20 / 1.37 / 2.14 / 3.85°; 1: 1.09 / 1.27 / 1.70 / 3.21°;
+  // 0.5: 1.20 / 1.37 / 2.14 / 3.85°; 1: 1.09 / 1.27 / 1.72 / 3.20°;
   // 2: 1.00 / 1.28 / 1.60 / 2.96°. Larger values overshoot below the true
   // elevation on a Lambertian surface (λ = 0.05, true azimuth: 1 → −0.6°, 2 → −0.8°).
   double plateau_tolerance = 1.0;
