@@ -8,6 +8,19 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/scripts/install-deps.sh"
 
+# The real-data tests (DiLiGenT ball, UW sets) read ../shared/data next to the
+# checkout; a clone elsewhere on this machine finds it at /work/shared/data.
+if [ -z "${LIGHTSTAGE_SHARED_DATA:-}" ]; then
+  for candidate in "$root/../shared/data" /work/shared/data; do
+    if [ -d "$candidate/diligent" ]; then
+      LIGHTSTAGE_SHARED_DATA=$(cd "$candidate" && pwd)
+      export LIGHTSTAGE_SHARED_DATA
+      break
+    fi
+  done
+fi
+echo "real data: ${LIGHTSTAGE_SHARED_DATA:-not found (set LIGHTSTAGE_SHARED_DATA; those tests skip)}"
+
 flavours=${LIGHTSTAGE_TEST_FLAVOURS:-release sanitize fuzz}
 jobs=${LIGHTSTAGE_JOBS:-$(nproc)}
 passed=0

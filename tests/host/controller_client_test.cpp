@@ -1,7 +1,7 @@
 // The host's controller client against a scripted controller in this process.
+#include "lightstage/host/controller/controller_client.hpp"
 #include "lightstage/common/message_channel.hpp"
 #include "lightstage/common/socket_link.hpp"
-#include "lightstage/host/controller/controller_client.hpp"
 #include "lightstage/host/controller/sequences.hpp"
 
 #include <gtest/gtest.h>
@@ -71,9 +71,8 @@ proto::ControllerMessage ack(const proto::HostMessage& m) {
 
 TEST(ControllerClient, NegotiatesAndSendsHeartbeats) {
   auto [host_end, controller_end] = socket_link_pair();
-  FakeController controller(std::move(controller_end), [](const proto::HostMessage& m, MessageChannel& c) {
-    c.send(ack(m));
-  });
+  FakeController controller(std::move(controller_end),
+                            [](const proto::HostMessage& m, MessageChannel& c) { c.send(ack(m)); });
   ControllerClientOptions options;
   options.heartbeat_period = milliseconds(10);
   ControllerClient client(std::move(host_end), options);
@@ -100,6 +99,28 @@ TEST(ControllerClient, ErrorRepliesBecomeControllerErrorsWithTheirCode) {
     EXPECT_EQ(e.code(), proto::Error::SAFETY_LIMIT);
     EXPECT_NE(std::string(e.what()).find("duty cycle"), std::string::npos);
   }
+}
+
+// A controller that already serves another host sends BUSY unasked and hangs
+// up: the caller must learn that, not only that the link closed.
+TEST(ControllerClient, ARefusalBeforeTheHandshakeIsAControllerError) {
+  auto [host_end, controller_end] = socket_link_pair();
+  std::thread refuse([link = std::move(controller_end)]() mutable {
+    MessageChannel channel(std::move(link));
+    proto::ControllerMessage busy;
+    busy.mutable_error()->set_code(proto::Error::BUSY);
+    busy.mutable_error()->set_message("another host controls this dome; try again later");
+    channel.send(busy);
+    channel.link().shutdown();
+  });
+  try {
+    ControllerClient client(std::move(host_end));
+    ADD_FAILURE() << "connected to a controller that refused";
+  } catch (const ControllerError& e) {
+    EXPECT_EQ(e.code(), proto::Error::BUSY);
+    EXPECT_NE(std::string(e.what()).find("another host"), std::string::npos) << e.what();
+  }
+  refuse.join();
 }
 
 TEST(ControllerClient, NoReplyTimesOut) {
@@ -130,8 +151,8 @@ TEST(ControllerClient, RunSequenceCollectsStepEventsUntilDone) {
   });
   ControllerClient client(std::move(host_end));
   int seen = 0;
-  const SequenceRun run = client.run_sequence(one_led_per_step({4, 5, 6}, {}, 12),
-                                              [&](const proto::StepEvent&) { ++seen; });
+  const SequenceRun run =
+      client.run_sequence(one_led_per_step({4, 5, 6}, {}, 12), [&](const proto::StepEvent&) { ++seen; });
   EXPECT_TRUE(run.ok());
   EXPECT_EQ(seen, 3);
   ASSERT_EQ(run.steps.size(), 3u);

@@ -85,6 +85,7 @@ void ControllerClient::read_loop() {
     if (message.request_id() != 0) {
       replies_[message.request_id()] = std::move(message);
     } else {
+      if (message.has_error()) refusal_ = message.error();
       events_.push_back(std::move(message));
     }
     changed_.notify_all();
@@ -110,19 +111,35 @@ void ControllerClient::heartbeat_loop() {
   }
 }
 
+void ControllerClient::throw_link_failure() const {
+  if (refusal_) {
+    throw ControllerError(refusal_->code(), fmt::format("controller: {} ({})", refusal_->message(),
+                                                        proto::Error::Code_Name(refusal_->code())));
+  }
+  throw LinkClosed(link_error_);
+}
+
 proto::ControllerMessage ControllerClient::request(proto::HostMessage message) {
   std::unique_lock lock(mutex_);
-  if (!link_error_.empty()) throw LinkClosed(link_error_);
+  if (!link_error_.empty()) throw_link_failure();
   const std::uint32_t id = next_request_id_++;
   message.set_request_id(id);
   lock.unlock();
-  channel_->send(message);
+  try {
+    channel_->send(message);
+  } catch (const LinkClosed&) {
+    // The controller may have refused and hung up first: let the reader take what it sent.
+    lock.lock();
+    changed_.wait_for(lock, options_.reply_timeout, [this] { return !link_error_.empty() || stopping_; });
+    if (refusal_ || !link_error_.empty()) throw_link_failure();
+    throw;
+  }
   lock.lock();
   const bool answered = changed_.wait_for(lock, options_.reply_timeout, [&] {
     return replies_.count(id) > 0 || !link_error_.empty() || stopping_;
   });
   if (replies_.count(id) == 0) {
-    if (!link_error_.empty()) throw LinkClosed(link_error_);
+    if (!link_error_.empty()) throw_link_failure();
     throw ControllerError(proto::Error::UNKNOWN,
                           answered ? "disconnected"
                                    : fmt::format("{}: no reply within {} ms", channel_->link().describe(),
@@ -188,7 +205,7 @@ std::optional<proto::ControllerMessage> ControllerClient::next_event(
     events_.pop_front();
     return event;
   }
-  if (!link_error_.empty()) throw LinkClosed(link_error_);
+  if (!link_error_.empty()) throw_link_failure();
   return std::nullopt;
 }
 

@@ -94,6 +94,9 @@ class ControllerClient {
   void read_loop();
   void heartbeat_loop();
   std::optional<proto::ControllerMessage> next_event(std::chrono::steady_clock::time_point deadline);
+  // After the link failed (mutex_ held): the controller's refusal as a
+  // ControllerError when it sent one, else LinkClosed.
+  [[noreturn]] void throw_link_failure() const;
 
   ControllerClientOptions options_;
   std::unique_ptr<MessageChannel> channel_;
@@ -105,6 +108,9 @@ class ControllerClient {
   std::map<std::uint32_t, proto::ControllerMessage> replies_;
   std::deque<proto::ControllerMessage> events_;
   std::string link_error_;  // set when the reader stops: why
+  // An Error the controller sent unasked (request id 0), e.g. BUSY before it
+  // hangs up on a second host: the reason a request then fails, not the hang-up.
+  std::optional<proto::Error> refusal_;
   bool stopping_ = false;
   bool heartbeats_ = true;
 
