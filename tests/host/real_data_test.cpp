@@ -139,8 +139,8 @@ TEST(HostRealData, DiligentBallGeneralReflectanceMethods) {
   banded.start_band_low = 0.2;
   banded.start_band_high = 0.5;
   const auto e_banded = mean_error(solve_bipolynomial(obs, banded));
-  // Monotonic is reported, not bounded: DiLiGenT's lights span 43° from the
-  // view axis, and Algorithm 1's uniqueness needs the hemisphere (≈10° here).
+  // Monotonic is only loosely bounded: DiLiGenT's lights span 43° from the
+  // view axis, and Algorithm 1's uniqueness needs the hemisphere.
   MonotonicOptions monotonic;
   monotonic.shadow_threshold = kShadow;
   monotonic.threads = 2;
