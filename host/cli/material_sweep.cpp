@@ -31,7 +31,7 @@ std::string noise_label(double lambda) {
 // Uniform directions on the upper hemisphere (z > 0.05: a light at the horizon lights nothing),
 // or within `cone_deg` of the view axis when that is below 90.
 Eigen::MatrixX3d random_lights(int count, double cone_deg, std::uint64_t seed) {
-  const double min_z = cone_deg < 90 ? std::cos(rad_from_deg(cone_deg)) : 0.05;
+  const double min_z = std::max(std::cos(rad_from_deg(cone_deg)), 0.05);
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> gauss;
   Eigen::MatrixX3d lights(count, 3);
@@ -104,6 +104,7 @@ SolveResult run_method(const std::string& name, const Observations& obs,
   args.automatic.monotonic_margin = options.auto_margin;
   args.monotonic.refine_step_deg = args.automatic.monotonic.refine_step_deg = options.refine_step_deg;
   args.monotonic.plateau_tolerance = options.plateau_tolerance;
+  args.start_band = options.start_band;
   args.threads = options.threads;
   args.resolve();
   args.robust.t_low = RobustOptions{}.t_low;  // the robust method keeps its own selection
@@ -258,6 +259,7 @@ nlohmann::json MaterialSweepResult::to_json() const {
   j["azimuth_from"] = options.azimuth_from;
   j["refine_step_deg"] = options.refine_step_deg;
   j["plateau_tolerance"] = options.plateau_tolerance;
+  j["start_band"] = options.start_band;
   j["auto_agreement_deg"] = options.auto_agreement_deg;
   j["auto_margin"] = options.auto_margin;
   j["seed"] = options.seed;

@@ -97,7 +97,7 @@ void add_solve_flags(CLI::App& sub, SolveArgs& args) {
          "--start-band", args.start_band,
          "bi-polynomial and auto: start from Lambert on the lit observations ranked in [LOW,HIGH) "
          "instead of the T_low set, e.g. 0.2,0.5 for lights in a narrow cone on materials that darken "
-         "at grazing incidence (DiLiGenT ball: 2.21 -> 1.50 deg)")
+         "at grazing incidence (DiLiGenT ball: 2.21 -> 1.49 deg)")
       ->delimiter(',')
       ->expected(2);
   sub.add_option("--estimator", args.estimator, "robust: irls-l1, ransac or none")
@@ -144,9 +144,12 @@ void SolveArgs::resolve() {
   a.monotonic.gamma = monotonic.gamma;
   a.monotonic.plateau_tolerance = monotonic.plateau_tolerance;
   if (threads) l2.threads = robust.threads = monotonic.threads = bipolynomial.threads = a.threads = *threads;
-  // Flags are checked before any input is read: a bad value fails at once, naming its flag.
-  monotonic.check();
-  bipolynomial.check();
+  // The chosen method's monotonic and bi-polynomial flags are checked before
+  // any input is read: a bad value fails at once, naming its flag. (Only the
+  // chosen method's: l2 takes --shadow-threshold -1, which they refuse.)
+  if (method == "monotonic") monotonic.check();
+  if (method == "bilinear" || method == "biquadratic" || method == "bicubic") bipolynomial.check();
+  if (method == "auto") a.check();
 }
 
 }  // namespace lightstage::cli

@@ -123,6 +123,31 @@ TEST(ControllerClient, ARefusalBeforeTheHandshakeIsAControllerError) {
   refuse.join();
 }
 
+// An error the controller reported earlier and got past (a malformed frame)
+// is not the reason for a later hang-up.
+TEST(ControllerClient, AnEarlierUnaskedErrorDoesNotExplainALaterHangUp) {
+  auto [host_end, controller_end] = socket_link_pair();
+  FakeController* fake = nullptr;
+  FakeController controller(std::move(controller_end), [&](const proto::HostMessage& m, MessageChannel& c) {
+    if (m.has_status()) {
+      proto::ControllerMessage malformed;
+      malformed.mutable_error()->set_code(proto::Error::MALFORMED_FRAME);
+      malformed.mutable_error()->set_message("frame CRC mismatch");
+      c.send(malformed);
+      proto::ControllerMessage status;
+      status.set_request_id(m.request_id());
+      status.mutable_status();
+      c.send(status);
+      return;
+    }
+    fake->drop();
+  });
+  fake = &controller;
+  ControllerClient client(std::move(host_end));
+  client.status();
+  EXPECT_THROW(client.abort(), LinkClosed);
+}
+
 TEST(ControllerClient, NoReplyTimesOut) {
   auto [host_end, controller_end] = socket_link_pair();
   FakeController controller(std::move(controller_end), [](const proto::HostMessage&, MessageChannel&) {});

@@ -82,10 +82,15 @@ void ControllerClient::read_loop() {
       return;
     }
     const std::lock_guard lock(mutex_);
+    // Only an error that is the last thing the controller said explains a hang-up.
+    if (message.request_id() == 0 && message.has_error()) {
+      refusal_ = message.error();
+    } else {
+      refusal_.reset();
+    }
     if (message.request_id() != 0) {
       replies_[message.request_id()] = std::move(message);
     } else {
-      if (message.has_error()) refusal_ = message.error();
       events_.push_back(std::move(message));
     }
     changed_.notify_all();

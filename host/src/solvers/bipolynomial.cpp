@@ -108,13 +108,14 @@ BiPolynomialPixelFit fit_bipolynomial_pixel(const PixelObservations& pixel,
   // Initial normal: Lambert on the T_low set, or on the start band (see the header).
   const std::vector<Eigen::Index>* initial = &ws.kept;
   if (options.start_band_high > 0) {
+    // lit ≥ needed (checked above); a band narrower than `needed` is widened downwards.
     const std::size_t lit = ws.candidates.size();
     const auto end = std::clamp(
         static_cast<std::size_t>(std::ceil(options.start_band_high * static_cast<double>(lit) - 1e-9)),
         needed, lit);
-    const auto begin =
-        std::min(static_cast<std::size_t>(std::floor(options.start_band_low * static_cast<double>(lit))),
-                 end - needed);
+    const auto begin = std::min(
+        static_cast<std::size_t>(std::ceil(options.start_band_low * static_cast<double>(lit) - 1e-9)),
+        end - needed);
     ws.initial.assign(ws.candidates.begin() + static_cast<std::ptrdiff_t>(begin),
                       ws.candidates.begin() + static_cast<std::ptrdiff_t>(end));
     initial = &ws.initial;

@@ -134,8 +134,10 @@ ElevationEstimate descend_plateau(const ElevationEstimate& start, double azimuth
   const double tolerance = start.cost * (1 + options.plateau_tolerance);
   const double fine = rad_from_deg(options.fine_step_deg);
   ElevationEstimate lowest = start;
-  while (lowest.elevation - fine >= 0) {
-    const double theta = lowest.elevation - fine;
+  // Whole steps from the start, the last one clamped to θ = 0 (repeated
+  // subtraction would drift and stop one step short of the horizon).
+  for (int k = 1; lowest.elevation > 0; ++k) {
+    const double theta = std::max(0.0, start.elevation - k * fine);
     const double cost = monotonicity_cost(direction_from_elevation_azimuth(theta, azimuth), options, ws);
     if (cost > tolerance) break;
     lowest = {theta, cost};
@@ -188,7 +190,8 @@ Eigen::Vector3d refine_normal(const Eigen::Vector3d& normal, double step_deg, co
       }
     }
   }
-  return direction_from_elevation_azimuth(theta, phi);
+  // The pattern search climbs the plateau again: descend it at the refined azimuth.
+  return direction_from_elevation_azimuth(descend_plateau({theta, best}, phi, options, ws).elevation, phi);
 }
 
 RingInterpolation::RingInterpolation(const Eigen::MatrixX3d& lights, const MonotonicOptions& options)
@@ -335,15 +338,7 @@ SolveResult solve_monotonic(const Observations& observations, const MonotonicOpt
           prepare_monotonic(pixel, *ws);
           const ElevationEstimate e = search_elevation(phi, options, *ws);
           Eigen::Vector3d n = direction_from_elevation_azimuth(e.elevation, phi);
-          if (options.refine_step_deg > 0) {
-            n = refine_normal(n, options.refine_step_deg, options, *ws);
-            // The pattern search climbs the plateau again: descend it at the refined azimuth.
-            const double refined_phi = std::atan2(n.y(), n.x());
-            const ElevationEstimate refined{std::asin(std::clamp(n.z(), -1.0, 1.0)),
-                                            monotonicity_cost(n, options, *ws)};
-            n = direction_from_elevation_azimuth(
-                descend_plateau(refined, refined_phi, options, *ws).elevation, refined_phi);
-          }
+          if (options.refine_step_deg > 0) n = refine_normal(n, options.refine_step_deg, options, *ws);
           std::vector<double> ratios;
           for (Eigen::Index j = 0; j < pixel.count(); ++j) {
             const double d = pixel.lights.row(j).dot(n);

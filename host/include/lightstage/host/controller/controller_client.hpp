@@ -108,8 +108,9 @@ class ControllerClient {
   std::map<std::uint32_t, proto::ControllerMessage> replies_;
   std::deque<proto::ControllerMessage> events_;
   std::string link_error_;  // set when the reader stops: why
-  // An Error the controller sent unasked (request id 0), e.g. BUSY before it
-  // hangs up on a second host: the reason a request then fails, not the hang-up.
+  // An Error the controller sent unasked (request id 0) as its last message,
+  // e.g. BUSY before it hangs up on a second host: when the link then closes,
+  // the reason a request fails, rather than the hang-up itself.
   std::optional<proto::Error> refusal_;
   bool stopping_ = false;
   bool heartbeats_ = true;

@@ -7,8 +7,8 @@
 //  1. bi-polynomial answer: bilinear and biquadratic fits on the same T_low
 //     set; the one with the lower BIC, m·ln(RSS/m) + terms·ln(m), wins (noise
 //     makes the extra biquadratic terms fit noise, and BIC sees it);
-//  2. monotonic answer: elevation search and 2-D refinement of δ, starting
-//     from the bi-polynomial normal's azimuth;
+//  2. monotonic answer: elevation search of δ with the plateau descent (and
+//     the 2-D refinement when enabled) at the bi-polynomial normal's azimuth;
 //  3. evidence: the two answers' angle d, and how one-lobe the profile
 //     i/(n·l) against n·h is at each (profile_monotonicity s_m, s_b).
 //     When they agree (d ≤ agreement_deg) the errors are largely independent

@@ -30,14 +30,15 @@ struct BiPolynomialOptions {
   double t_low = 0.25;             // kept fraction of the lit observations, in (0, 1]
   double shadow_threshold = 1e-6;  // observations ≤ this are shadows (≥ 0)
   // Opt-in start band (0, 0 = off): the initial Lambertian fit uses the lit
-  // observations ranked in [low, high) (fractions) instead of the T_low set,
+  // observations ranked in [low, high) (fractions; widened downwards to
+  // terms + 2 observations when narrower) instead of the T_low set,
   // skipping the darkest as well as the specular ones. Why: with lights in a
   // narrow cone the alternation barely moves the initial zenith (a radial
   // tilt and a fall-off of ρ at grazing incidence explain the data alike), so
   // a start biased by grazing observations stays biased. On the DiLiGenT ball
   // (43° cone; reflectance 0.87–0.94 of Lambert's at 60–80° incidence)
-  // 0.2,0.5 takes biquadratic from 2.21° to 1.50° and auto from 2.16° to
-  // 1.58°. Not the default: on the material sweep with lights in a 43° cone
+  // 0.2,0.5 takes biquadratic from 2.21° to 1.49° and auto from 2.16° to
+  // 1.57°. Not the default: on the material sweep with lights in a 43° cone
   // (`bench materials --light-cone 43`), whose materials have no such
   // fall-off, it costs biquadratic 1.55° -> 2.99° without noise (Oren–Nayar,
   // specular tails in the band), and over the hemisphere 0.56° -> 1.31°.

@@ -16,12 +16,13 @@
 //     observations near the terminator go behind the hypothesised surface (or
 //     their y' explodes) and δ rises steeply; above it, the diffuse part of the
 //     profile stays nearly monotonic and δ barely grows — with noise it even
-//     falls on average. So the argmin drifts up that plateau (the sweep's
-//     Lambertian sphere at λ = 0.05: +1.3° on average), and from it θ
+//     falls on average. So the argmin drifts up that plateau (λ = 0.05 on a
+//     Lambertian surface: +1.3° on the sweep's sphere with the robust
+//     azimuth, +2.4° on the unit test's grid with the true one), and from it θ
 //     descends while δ stays within (1 + plateau_tolerance) × δ_min, the noise
 //     level of the best hypothesis (docs/solvers.md has the measurements).
 // Outputs: normal, albedo = median of i_j / (n·l_j) over lit observations,
-// residual = δ at the minimum (in y'^γ units), confidence = the fraction of
+// residual = δ at the answer (in y'^γ units), confidence = the fraction of
 // consecutive pairs (sorted by n·h) whose profile i/(n·l) does not decrease.
 
 #include "lightstage/host/radiometry.hpp"
@@ -87,7 +88,7 @@ double monotonicity_cost(const Eigen::Vector3d& normal, const MonotonicOptions& 
 
 struct ElevationEstimate {
   double elevation = 0;  // radians, [0, π/2]
-  double cost = 0;       // δ at the minimum
+  double cost = 0;       // δ there (after step 3: up to (1 + plateau_tolerance) × the minimum)
 };
 // 1-D search of θ at a fixed azimuth (steps 2 and 3), after prepare_monotonic.
 ElevationEstimate search_elevation(double azimuth, const MonotonicOptions& options,
@@ -99,8 +100,8 @@ ElevationEstimate descend_plateau(const ElevationEstimate& start, double azimuth
                                   const MonotonicOptions& options, MonotonicWorkspace& workspace);
 
 // Optional local refinement of (θ, φ) together around an estimate: a pattern
-// search on δ with steps from `step_deg` down to options.fine_step_deg.
-// Returns the refined normal (unchanged when nothing improves δ).
+// search on δ with steps from `step_deg` down to options.fine_step_deg, then
+// step 3 at the refined azimuth. Returns the refined normal.
 Eigen::Vector3d refine_normal(const Eigen::Vector3d& normal, double step_deg, const MonotonicOptions& options,
                               MonotonicWorkspace& workspace);
 
