@@ -68,6 +68,32 @@ double OrenNayar::eval(const Vec3& n, const Vec3& l, const Vec3& v) const {
 
 std::string OrenNayar::describe() const { return fmt::format("oren-nayar:sigma={}", sigma_); }
 
+namespace {
+// Unpolarised Fresnel reflectance at a boundary into relative index eta,
+// for an incidence cosine cos_i; total internal reflection gives 1.
+double dielectric_fresnel(double cos_i, double eta) {
+  cos_i = std::clamp(cos_i, 0.0, 1.0);
+  const double sin_t2 = (1 - cos_i * cos_i) / (eta * eta);
+  if (sin_t2 >= 1) return 1;
+  const double cos_t = std::sqrt(1 - sin_t2);
+  const double s = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+  const double p = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+  return 0.5 * (s * s + p * p);
+}
+}  // namespace
+
+WolffDiffuse::WolffDiffuse(double eta) : eta_(eta) {
+  if (!(eta > 1 && eta < 4)) fail("wolff: 'eta' must be in (1, 4), got {}", eta);
+  scale_ = 1 / std::pow(1 - dielectric_fresnel(1, eta), 2);
+}
+
+double WolffDiffuse::eval(const Vec3& n, const Vec3& l, const Vec3& v) const {
+  if (!above(n, l, v)) return 0;
+  return scale_ * (1 - dielectric_fresnel(n.dot(l), eta_)) * (1 - dielectric_fresnel(n.dot(v), eta_));
+}
+
+std::string WolffDiffuse::describe() const { return fmt::format("wolff:eta={}", eta_); }
+
 BlinnPhong::BlinnPhong(double shininess) : shininess_(shininess) { require_positive(shininess, "shininess"); }
 
 double BlinnPhong::eval(const Vec3& n, const Vec3& l, const Vec3& v) const {

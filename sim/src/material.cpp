@@ -127,6 +127,15 @@ Material parse_material(const std::string& preset, const AlbedoTexture& albedo) 
     } else {
       m.specular = std::make_shared<Ward>(get("alpha", 0.2));
     }
+  } else if (name == "dielectric") {
+    // A smooth dielectric: Wolff's diffuse (darkening at grazing incidence)
+    // plus a Cook–Torrance highlight with the same index's f0.
+    const double eta = get("eta", 1.5);
+    m.diffuse = std::make_shared<WolffDiffuse>(eta);
+    m.ks = get("ks", 0.3);
+    m.kd = get("kd", 1.0 - m.ks);
+    const double f0 = std::pow((eta - 1) / (eta + 1), 2);
+    if (m.ks > 0) m.specular = std::make_shared<CookTorrance>(get("roughness", 0.3), f0);
   } else if (name == "two-lobe-ct") {
     // Fig. 2.8(a): k1 Lambert + k2 Cook–Torrance with m = 0.5.
     m.kd = get("k1", 0.5);
@@ -152,8 +161,8 @@ Material parse_material(const std::string& preset, const AlbedoTexture& albedo) 
     m.specular = std::make_shared<Mirror>();
   } else {
     fail(
-        "material '{}': unknown preset '{}' (known: lambert, oren-nayar, blinn-phong, cook-torrance, ward, "
-        "two-lobe-ct, two-lobe-fabric, two-lobe-random, chrome)",
+        "material '{}': unknown preset '{}' (known: lambert, oren-nayar, dielectric, blinn-phong, "
+        "cook-torrance, ward, two-lobe-ct, two-lobe-fabric, two-lobe-random, chrome)",
         preset, name);
   }
   if (spec.params.contains("albedo")) {
@@ -176,6 +185,7 @@ std::vector<std::string> material_presets() {
           "blinn-phong:shininess=50,ks=0.5",
           "cook-torrance:roughness=0.3,ks=0.5,f0=0.5",
           "ward:alpha=0.2,ks=0.5",
+          "dielectric:eta=1.5,ks=0.3,roughness=0.3",
           "two-lobe-ct:k1=0.5,k2=0.5",
           "two-lobe-fabric:k1=0.5,k2=0.5",
           "two-lobe-random:k1=0.5,k2=0.5",

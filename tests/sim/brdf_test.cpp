@@ -18,8 +18,9 @@ Vec3 random_upper(std::mt19937_64& rng) {
 }
 
 std::vector<std::shared_ptr<Brdf>> reciprocal_lobes() {
-  return {std::make_shared<Lambert>(), std::make_shared<OrenNayar>(0.4), std::make_shared<BlinnPhong>(30),
-          std::make_shared<CookTorrance>(0.3, 0.5), std::make_shared<Ward>(0.2)};
+  return {std::make_shared<Lambert>(),      std::make_shared<OrenNayar>(0.4),
+          std::make_shared<BlinnPhong>(30), std::make_shared<CookTorrance>(0.3, 0.5),
+          std::make_shared<Ward>(0.2),      std::make_shared<WolffDiffuse>(1.5)};
 }
 
 TEST(SimBrdf, ReciprocalAndNonNegative) {
@@ -89,6 +90,21 @@ TEST(SimBrdf, OrenNayarWithZeroRoughnessIsLambert) {
       EXPECT_NEAR(on.eval(n, l, v), 1.0, 1e-12);
     }
   }
+}
+
+// Fresnel transmission in and out: 1 at normal incidence and exit, darker at
+// grazing incidence (values from the Fresnel equations at η = 1.5).
+TEST(SimBrdf, WolffDiffuseDarkensAtGrazingIncidence) {
+  const WolffDiffuse wolff(1.5);
+  const Vec3 n = Vec3::UnitZ();
+  auto at = [](double deg) { return Vec3(std::sin(rad_from_deg(deg)), 0, std::cos(rad_from_deg(deg))); };
+  EXPECT_NEAR(wolff.eval(n, n, n), 1.0, 1e-12);
+  EXPECT_NEAR(wolff.eval(n, at(60), n), 0.9488, 1e-4);
+  EXPECT_NEAR(wolff.eval(n, at(80), n), 0.6378, 1e-4);
+  EXPECT_NEAR(wolff.eval(n, at(60), at(80)), 0.9488 * 0.6378, 1e-4);
+  EXPECT_THROW(WolffDiffuse(1.0), Error);
+  const Material dielectric = parse_material("dielectric:eta=1.5,ks=0");
+  EXPECT_NEAR(dielectric.shading(0, 0, n, at(80), n), 0.6378 * std::cos(rad_from_deg(80)), 1e-4);
 }
 
 TEST(SimBrdf, TwoLobeFamiliesFollowTheDissertation) {
