@@ -82,10 +82,9 @@ void add_bench(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--refine-step", args->sweep.refine_step_deg, "monotonic: 2-D refinement step (0 = off)")
       ->capture_default_str();
-  sub->add_option("--start-band", args->sweep.start_band,
-                  "bi-polynomial and auto: initial Lambert fit on the lit observations ranked in [LOW,HIGH)")
-      ->delimiter(',')
-      ->expected(2);
+  sub->add_option("--falloff", args->sweep.falloff,
+                  "bi-polynomial and auto: the start's incidence fall-off ('auto' per material, 0 = Lambert)")
+      ->capture_default_str();
   sub->add_option("--plateau-tolerance", args->sweep.plateau_tolerance,
                   "monotonic and auto: lowest elevation within (1 + T) x the minimum cost (0 = the minimum)")
       ->capture_default_str();

@@ -104,7 +104,7 @@ SolveResult run_method(const std::string& name, const Observations& obs,
   args.automatic.monotonic_margin = options.auto_margin;
   args.monotonic.refine_step_deg = args.automatic.monotonic.refine_step_deg = options.refine_step_deg;
   args.monotonic.plateau_tolerance = options.plateau_tolerance;
-  args.start_band = options.start_band;
+  args.falloff = options.falloff;
   args.threads = options.threads;
   args.resolve();
   args.robust.t_low = RobustOptions{}.t_low;  // the robust method keeps its own selection
@@ -161,6 +161,7 @@ void MaterialSweepOptions::check() const {
   if (!(light_cone_deg >= 20 && light_cone_deg <= 90))
     fail("--light-cone: must be in [20, 90] degrees, got {}", light_cone_deg);
   if (threads < 0) fail("--threads: must be 0 (automatic) or positive, got {}", threads);
+  parse_falloff(falloff);
 }
 
 std::size_t MaterialSweepOptions::cells() const {
@@ -259,7 +260,7 @@ nlohmann::json MaterialSweepResult::to_json() const {
   j["azimuth_from"] = options.azimuth_from;
   j["refine_step_deg"] = options.refine_step_deg;
   j["plateau_tolerance"] = options.plateau_tolerance;
-  j["start_band"] = options.start_band;
+  j["falloff"] = options.falloff;
   j["auto_agreement_deg"] = options.auto_agreement_deg;
   j["auto_margin"] = options.auto_margin;
   j["seed"] = options.seed;

@@ -33,7 +33,7 @@ struct MaterialSweepOptions {
   std::string azimuth_from = "robust";
   double refine_step_deg = MonotonicOptions{}.refine_step_deg;      // monotonic's 2-D refinement (0 = off)
   double plateau_tolerance = MonotonicOptions{}.plateau_tolerance;  // monotonic's step 3 (0 = argmin)
-  std::vector<double> start_band;  // bi-polynomial and auto: --start-band LOW,HIGH (empty = the T_low set)
+  std::string falloff = "auto";  // bi-polynomial and auto: --falloff auto|K
   double auto_agreement_deg = AutoOptions{}.agreement_deg;
   double auto_margin = AutoOptions{}.monotonic_margin;
   std::uint64_t seed = 1;

@@ -7,6 +7,9 @@
 
 #include <fmt/format.h>
 
+#include <charconv>
+#include <cmath>
+
 namespace lightstage::cli {
 
 void add_output_flags(CLI::App& sub, OutputFlags& flags, const std::string& json_what) {
@@ -93,13 +96,11 @@ void add_solve_flags(CLI::App& sub, SolveArgs& args) {
   sub.add_option("--min-observations", args.min_observations,
                  "reject pixels with fewer observations (l2, robust, monotonic)");
   sub.add_option("--max-iterations", args.max_iterations, "bi-polynomial alternations (default 100)");
-  sub.add_option(
-         "--start-band", args.start_band,
-         "bi-polynomial and auto: start from Lambert on the lit observations ranked in [LOW,HIGH) "
-         "instead of the T_low set, e.g. 0.2,0.5 for lights in a narrow cone on materials that darken "
-         "at grazing incidence (DiLiGenT ball: 2.21 -> 1.49 deg)")
-      ->delimiter(',')
-      ->expected(2);
+  sub.add_option("--falloff", args.falloff,
+                 "bi-polynomial and auto: the start's incidence fall-off kappa, rho ~ 1 + kappa n.l: 'auto' "
+                 "estimates it from the object, 0 is the Lambertian start as published (DiLiGenT ball: "
+                 "biquadratic 2.21 deg with 0, 1.25 with auto)")
+      ->capture_default_str();
   sub.add_option("--estimator", args.estimator, "robust: irls-l1, ransac or none")
       ->check(CLI::IsMember({"irls-l1", "ransac", "none"}))
       ->capture_default_str();
@@ -116,6 +117,16 @@ void add_solve_flags(CLI::App& sub, SolveArgs& args) {
   sub.add_flag("--no-clamp", args.no_clamp, "do not clamp normalised values to <= 1");
   sub.add_option("--threads", args.threads, "solver threads (0 = all cores)");
   add_shape_prior_flags(sub, args.shape_prior);
+}
+
+std::optional<double> parse_falloff(const std::string& text) {
+  if (text == "auto") return std::nullopt;
+  double value = 0;
+  const auto* end = text.data() + text.size();
+  const auto [at, error] = std::from_chars(text.data(), end, value);
+  if (text.empty() || error != std::errc{} || at != end || !std::isfinite(value))
+    fail("--falloff: expected 'auto' or a number, got '{}'", text);
+  return value;
 }
 
 void SolveArgs::set_progress(const SolveProgress& progress) {
@@ -137,10 +148,7 @@ void SolveArgs::resolve() {
   if (min_observations)
     l2.min_observations = robust.min_observations = monotonic.min_observations = *min_observations;
   if (max_iterations) bipolynomial.max_iterations = a.bipolynomial.max_iterations = *max_iterations;
-  if (!start_band.empty()) {
-    bipolynomial.start_band_low = a.bipolynomial.start_band_low = start_band[0];
-    bipolynomial.start_band_high = a.bipolynomial.start_band_high = start_band[1];
-  }
+  bipolynomial.falloff = a.bipolynomial.falloff = parse_falloff(falloff);
   a.monotonic.gamma = monotonic.gamma;
   a.monotonic.plateau_tolerance = monotonic.plateau_tolerance;
   if (threads) l2.threads = robust.threads = monotonic.threads = bipolynomial.threads = a.threads = *threads;

@@ -65,7 +65,7 @@ struct SolveArgs {
   // Flags every method shares: when given, resolve() copies them into each method's options.
   std::optional<double> shadow_threshold, t_low;
   std::optional<int> min_observations, threads, max_iterations;
-  std::vector<double> start_band;  // --start-band LOW,HIGH: bi-polynomial and auto (empty = the T_low set)
+  std::string falloff = "auto";  // --falloff auto|K: bi-polynomial and auto (incidence_falloff.hpp)
   RadiometryOptions radiometry;
   bool no_clamp = false;
   void resolve();
@@ -73,5 +73,8 @@ struct SolveArgs {
   void set_progress(const SolveProgress& progress);
 };
 void add_solve_flags(CLI::App& sub, SolveArgs& args);
+
+// --falloff: "auto" (estimated from the object) or a number; throws InputError naming the flag.
+std::optional<double> parse_falloff(const std::string& text);
 
 }  // namespace lightstage::cli

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <fstream>
 
 namespace lightstage {
@@ -62,8 +63,26 @@ TEST_F(GeneralReflectanceCli, EveryMethodSolvesAndBeatsL2) {
   }
   const auto summary = read_json(dir_ / "biquadratic" / "summary.json");
   EXPECT_EQ(summary["reflectance"]["order"], 2);
+  // The start's fall-off is estimated from the object and recorded; a sphere of
+  // Lambert + Cook–Torrance has none.
+  const auto& falloff = summary["parameters"]["falloff"];
+  EXPECT_TRUE(falloff["estimated"].get<bool>());
+  EXPECT_LT(std::abs(falloff["kappa"].get<double>()), 0.05);
+  EXPECT_GT(falloff["pixels"].get<int>(), 1000);
+  EXPECT_TRUE(read_json(dir_ / "auto" / "summary.json")["parameters"]["bipolynomial"]["falloff"]["estimated"]
+                  .get<bool>());
   ASSERT_EQ(summary["files"]["brdf"].size(), 9u);
   EXPECT_TRUE(std::filesystem::exists(dir_ / "biquadratic" / "brdf_C00.pfm"));
+}
+
+TEST_F(GeneralReflectanceCli, AGivenFalloffIsUsedAsIs) {
+  const auto out = dir_ / "biquadratic-falloff";
+  const auto run = run_lightstage({"solve", "--input", (dir_ / "stack").string(), "--method", "biquadratic",
+                                   "--falloff", "0.3", "--out", out.string()});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto falloff = read_json(out / "summary.json")["parameters"]["falloff"];
+  EXPECT_FALSE(falloff["estimated"].get<bool>());
+  EXPECT_EQ(falloff["kappa"].get<double>(), 0.3);
 }
 
 TEST_F(GeneralReflectanceCli, MonotonicTakesItsAzimuthFromAnotherMethod) {
@@ -153,10 +172,16 @@ TEST(GeneralReflectanceCliErrors, BadInputNamesTheFlag) {
   run = run_lightstage({"bench", "materials", "--light-cone", "5"});
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.err.find("--light-cone"), std::string::npos) << run.err;
-  run = run_lightstage(
-      {"solve", "--input", "x", "--out", "y", "--method", "biquadratic", "--start-band", "0.5,0.2"});
-  EXPECT_EQ(run.exit_code, 1);
-  EXPECT_NE(run.err.find("--start-band"), std::string::npos) << run.err;
+  // --falloff: out of range (checked before any input is read) or not a number, for solve and bench.
+  for (const char* value : {"7", "steep", ""}) {
+    run = run_lightstage(
+        {"solve", "--input", "x", "--out", "y", "--method", "biquadratic", "--falloff", value});
+    EXPECT_EQ(run.exit_code, 1) << value;
+    EXPECT_NE(run.err.find("--falloff"), std::string::npos) << run.err;
+    run = run_lightstage({"bench", "materials", "--falloff", value});
+    EXPECT_EQ(run.exit_code, 1) << value;
+    EXPECT_NE(run.err.find("--falloff"), std::string::npos) << run.err;
+  }
   run = run_lightstage(
       {"solve", "--input", "x", "--out", "y", "--method", "auto", "--plateau-tolerance", "-1"});
   EXPECT_EQ(run.exit_code, 1);

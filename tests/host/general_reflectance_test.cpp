@@ -240,9 +240,8 @@ TEST(Options, ErrorsNameTheFieldAndValue) {
   b.t_low = 0;
   EXPECT_NE(error_of([&] { b.check(); }).find("--t-low"), std::string::npos);
   b = {};
-  b.start_band_low = 0.5;
-  b.start_band_high = 0.2;
-  EXPECT_NE(error_of([&] { b.check(); }).find("--start-band"), std::string::npos);
+  b.falloff = 6.0;
+  EXPECT_NE(error_of([&] { b.check(); }).find("--falloff"), std::string::npos);
   RobustOptions r;
   r.min_observations = 2;
   EXPECT_NE(error_of([&] { r.check(); }).find("min_observations"), std::string::npos);

@@ -92,16 +92,14 @@ TEST(HostRealData, DiligentBallReproducesTheLeastSquaresBaseline) {
 // dissertation's real-data shadow threshold (0.02), on every fourth mask pixel
 // of the ball (a checkerboard-like subset, ~3,950 pixels, spread over the whole
 // ball: the error depends on the distance from the centre). Published on the
-// whole ball: ST14 (bi-polynomial) 1.74, learned methods 1.24–1.5. Measured
-// (whole ball): robust 2.09, biquadratic 2.21, auto 2.16 — the error is a
-// radial bias (normals ~2.5° too far from the viewer at 30–60° from it): the
-// ball's reflectance falls below Lambert's at grazing incidence (0.94 of the
-// near-normal ratio at 60–70°, 0.87 at 70–80°), exactly the observations T_low
-// keeps, and with lights in a 43° cone the bi-polynomial cannot tell that
-// fall-off from a tilt (its full minimum of Eq. 3.16 is 6.5° off). The bounds
-// pin today's numbers; the 1.74 target is open by default. The opt-in start
-// band (Lambert on the lit observations ranked 20–50%, skipping the grazing
-// ones) reaches it: whole ball biquadratic 1.49, auto 1.57.
+// whole ball: ST14 (bi-polynomial) 1.74, learned methods 1.24–1.5. The ball's
+// reflectance falls below Lambert's at grazing incidence (0.94 of the
+// near-normal ratio at 60–70°, 0.87 at 70–80°), exactly the observations
+// T_low keeps; with the published Lambertian start (falloff 0) that leaves a
+// radial bias the alternation cannot undo with lights in a 43° cone
+// (biquadratic 2.21 on the whole ball). The start with the object's
+// incidence fall-off (the default; κ ≈ 0.385 estimated) removes it: whole ball
+// biquadratic 1.25, bicubic 1.21, auto 1.39.
 TEST(HostRealData, DiligentBallGeneralReflectanceMethods) {
   const auto ball = data_dir("diligent/ballPNG");
   if (ball.empty()) GTEST_SKIP() << "shared data not found";
@@ -133,12 +131,13 @@ TEST(HostRealData, DiligentBallGeneralReflectanceMethods) {
   automatic.bipolynomial.shadow_threshold = automatic.monotonic.shadow_threshold = kShadow;
   automatic.threads = 2;
   const auto e_robust = mean_error(solve_robust(obs, robust));
-  const auto e_biquadratic = mean_error(solve_bipolynomial(obs, biquadratic));
+  const SolveResult r_biquadratic = solve_bipolynomial(obs, biquadratic);
+  const auto e_biquadratic = mean_error(r_biquadratic);
   const auto e_auto = mean_error(solve_auto(obs, automatic));
-  BiPolynomialOptions banded = biquadratic;
-  banded.start_band_low = 0.2;
-  banded.start_band_high = 0.5;
-  const auto e_banded = mean_error(solve_bipolynomial(obs, banded));
+  const double kappa = r_biquadratic.parameters["falloff"]["kappa"].get<double>();
+  BiPolynomialOptions published = biquadratic;
+  published.falloff = 0.0;
+  const auto e_published = mean_error(solve_bipolynomial(obs, published));
   // Monotonic is only loosely bounded: DiLiGenT's lights span 43° from the
   // view axis, and Algorithm 1's uniqueness needs the hemisphere.
   MonotonicOptions monotonic;
@@ -148,15 +147,20 @@ TEST(HostRealData, DiligentBallGeneralReflectanceMethods) {
   const auto e_monotonic = mean_error(solve_monotonic(obs, monotonic, azimuth));
   std::cout << fmt::format(
       "ballPNG subset ({} px), mean / median deg: robust {:.3f} / {:.3f}, biquadratic {:.3f} / {:.3f}, auto "
-      "{:.3f} / {:.3f}, biquadratic with start band 0.2-0.5 {:.3f} / {:.3f}, monotonic (robust azimuth) "
-      "{:.3f} / {:.3f} (ST14 published 1.74); {:.1f} s\n",
+      "{:.3f} / {:.3f} (fall-off {:.3f}), biquadratic with the Lambertian start {:.3f} / {:.3f}, monotonic "
+      "(robust azimuth) {:.3f} / {:.3f} (ST14 published 1.74); {:.1f} s\n",
       subset, e_robust.mean, e_robust.median, e_biquadratic.mean, e_biquadratic.median, e_auto.mean,
-      e_auto.median, e_banded.mean, e_banded.median, e_monotonic.mean, e_monotonic.median,
+      e_auto.median, kappa, e_published.mean, e_published.median, e_monotonic.mean, e_monotonic.median,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   EXPECT_LT(e_robust.mean, 2.2);
-  EXPECT_LT(std::min(e_biquadratic.mean, e_auto.mean), 2.3);
-  EXPECT_LT(e_auto.mean, 2.3);
-  EXPECT_LT(e_banded.mean, 1.74);  // 1.49 measured on this subset
+  // The target: at least as accurate as ST14's published 1.74.
+  EXPECT_LT(std::min(e_biquadratic.mean, e_auto.mean), 1.74);
+  EXPECT_LT(e_biquadratic.mean, 1.5);
+  EXPECT_LT(e_auto.mean, 1.6);
+  // The ball is a dielectric: it darkens at grazing incidence (κ > 0), and the fall-off is what helps.
+  EXPECT_GT(kappa, 0.2);
+  EXPECT_LT(kappa, 0.6);
+  EXPECT_GT(e_published.mean, e_biquadratic.mean + 0.5);
   // Monotonic: 3.95 measured (8.7 before the plateau descent); a loose bound so that a breakage shows.
   EXPECT_LT(e_monotonic.mean, 6.0);
 }

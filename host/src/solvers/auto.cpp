@@ -36,6 +36,7 @@ SolveResult solve_auto(const Observations& observations, const AutoOptions& opti
   BiPolynomialOptions bipolynomial = options.bipolynomial;
   MonotonicOptions monotonic = options.monotonic;
   bipolynomial.threads = monotonic.threads = options.threads;
+  const auto falloff = resolve_falloff(observations, bipolynomial);
   detail::DriverSettings settings;
   settings.method = "auto";
   settings.threads = options.threads;
@@ -106,6 +107,7 @@ SolveResult solve_auto(const Observations& observations, const AutoOptions& opti
       },
       result);
   result.parameters = options.to_json();
+  result.parameters["bipolynomial"]["falloff"] = falloff_json(bipolynomial, falloff);
   result.reflectance = {{"model", "bipolynomial"},
                         {"name", bipolynomial_name(bipolynomial.order)},
                         {"order", bipolynomial.order},

@@ -22,12 +22,9 @@ void BiPolynomialOptions::check() const {
   if (!(std::isfinite(shadow_threshold) && shadow_threshold >= 0))
     fail("BiPolynomialOptions.shadow_threshold (--shadow-threshold): must be finite and >= 0, got {}",
          shadow_threshold);
-  if (!(start_band_high == 0 && start_band_low == 0) &&
-      !(start_band_low >= 0 && start_band_low < start_band_high && start_band_high <= 1))
-    fail(
-        "BiPolynomialOptions.start_band (--start-band): need 0 <= LOW < HIGH <= 1 (or 0,0 = the T_low set), "
-        "got {},{}",
-        start_band_low, start_band_high);
+  if (falloff && !(*falloff >= kMinFalloff && *falloff <= kMaxFalloff))
+    fail("BiPolynomialOptions.falloff (--falloff): must be 'auto' or in [{}, {}], got {}", kMinFalloff,
+         kMaxFalloff, *falloff);
   if (max_iterations < 1)
     fail("BiPolynomialOptions.max_iterations (--max-iterations): must be at least 1, got {}", max_iterations);
   if (!(tolerance >= 0 && std::isfinite(tolerance)))
@@ -41,7 +38,7 @@ nlohmann::json BiPolynomialOptions::to_json() const {
           {"model", bipolynomial_name(order)},
           {"t_low", t_low},
           {"shadow_threshold", shadow_threshold},
-          {"start_band", {start_band_low, start_band_high}},
+          {"falloff", falloff ? nlohmann::json(*falloff) : nlohmann::json("auto")},
           {"max_iterations", max_iterations},
           {"tolerance", tolerance},
           {"drop_saturated", drop_saturated},
@@ -76,53 +73,68 @@ double solve_coefficients(int order, const Eigen::Vector3d& n, const PixelObserv
 
 }  // namespace
 
-BiPolynomialPixelFit fit_bipolynomial_pixel(const PixelObservations& pixel,
-                                            const BiPolynomialOptions& options, BiPolynomialWorkspace& ws) {
-  BiPolynomialPixelFit fit;
-  const int order = options.order;
-  const int terms = bipolynomial_term_count(order);
-  const Eigen::Index images = pixel.count();
+bool select_low_frequency(const PixelObservations& pixel, const BiPolynomialOptions& options,
+                          BiPolynomialWorkspace& ws) {
   ws.candidates.clear();
-  for (Eigen::Index j = 0; j < images; ++j) {
+  for (Eigen::Index j = 0; j < pixel.count(); ++j) {
     if (pixel.usable[static_cast<std::size_t>(j)] && pixel.values(j) > options.shadow_threshold)
       ws.candidates.push_back(j);
   }
   // Below terms + 2 observations the coefficients would interpolate noise exactly.
-  const auto needed = static_cast<std::size_t>(terms + 2);
-  if (ws.candidates.size() < needed) {
-    fit.status = BiPolynomialPixelFit::Status::kTooFewObservations;
-    return fit;
-  }
+  const auto needed = static_cast<std::size_t>(bipolynomial_term_count(options.order) + 2);
+  if (ws.candidates.size() < needed) return false;
   auto keep =
       static_cast<std::size_t>(std::ceil(options.t_low * static_cast<double>(ws.candidates.size()) - 1e-9));
   keep = std::clamp(keep, needed, ws.candidates.size());
   std::stable_sort(ws.candidates.begin(), ws.candidates.end(),
                    [&](Eigen::Index a, Eigen::Index b) { return pixel.values(a) < pixel.values(b); });
   ws.kept.assign(ws.candidates.begin(), ws.candidates.begin() + static_cast<std::ptrdiff_t>(keep));
+  return true;
+}
+
+std::optional<FalloffEstimate> resolve_falloff(const Observations& observations,
+                                               BiPolynomialOptions& options) {
+  if (options.falloff) return std::nullopt;
+  const FalloffEstimate estimate = estimate_incidence_falloff(observations, options);
+  options.falloff = estimate.kappa;
+  return estimate;
+}
+
+nlohmann::json falloff_json(const BiPolynomialOptions& options,
+                            const std::optional<FalloffEstimate>& estimate) {
+  nlohmann::json j = {{"kappa", options.falloff.value_or(0.0)}, {"estimated", estimate.has_value()}};
+  if (estimate) {
+    j["pixels"] = estimate->pixels;
+    j["quartiles"] = {estimate->quartile_low, estimate->quartile_high};
+  }
+  return j;
+}
+
+BiPolynomialPixelFit fit_bipolynomial_pixel(const PixelObservations& pixel,
+                                            const BiPolynomialOptions& options, BiPolynomialWorkspace& ws) {
+  BiPolynomialPixelFit fit;
+  const int order = options.order;
+  const int terms = bipolynomial_term_count(order);
+  const Eigen::Index images = pixel.count();
+  if (!select_low_frequency(pixel, options, ws)) {
+    fit.status = BiPolynomialPixelFit::Status::kTooFewObservations;
+    return fit;
+  }
+  const std::size_t keep = ws.kept.size();
   fit.kept = static_cast<int>(keep);
 
   ws.halves.resize(images, 3);
   for (Eigen::Index j = 0; j < images; ++j)
     ws.halves.row(j) = (pixel.lights.row(j) + Eigen::RowVector3d(0, 0, 1)).normalized();
 
-  // Initial normal: Lambert on the T_low set, or on the start band (see the header).
-  const std::vector<Eigen::Index>* initial = &ws.kept;
-  if (options.start_band_high > 0) {
-    // lit ≥ needed (checked above); a band narrower than `needed` is widened downwards.
-    const std::size_t lit = ws.candidates.size();
-    const auto end = std::clamp(
-        static_cast<std::size_t>(std::ceil(options.start_band_high * static_cast<double>(lit) - 1e-9)),
-        needed, lit);
-    const auto begin = std::min(
-        static_cast<std::size_t>(std::ceil(options.start_band_low * static_cast<double>(lit) - 1e-9)),
-        end - needed);
-    ws.initial.assign(ws.candidates.begin() + static_cast<std::ptrdiff_t>(begin),
-                      ws.candidates.begin() + static_cast<std::ptrdiff_t>(end));
-    initial = &ws.initial;
-  }
+  // Initial normal: Lambert with the object's fall-off κ on the T_low set (a
+  // degenerate fall-off fit keeps the Lambertian start).
   Eigen::Vector3d s;
-  if (!detail::lambert_fit(pixel.lights, pixel.values, *initial, s) || s.norm() < 1e-12) return fit;
+  if (!detail::lambert_fit(pixel.lights, pixel.values, ws.kept, s) || s.norm() < 1e-12) return fit;
   Eigen::Vector3d n = s.normalized();
+  if (const double kappa = options.falloff.value_or(0.0); kappa != 0) {
+    if (const auto start = fit_falloff_pixel(pixel, ws.kept, n, kappa)) n = start->normal;
+  }
 
   Eigen::VectorXd coefficients;
   Eigen::Vector3d best_n = n;
@@ -178,8 +190,10 @@ BiPolynomialPixelFit fit_bipolynomial_pixel(const PixelObservations& pixel,
   return fit;
 }
 
-SolveResult solve_bipolynomial(const Observations& observations, const BiPolynomialOptions& options) {
-  options.check();
+SolveResult solve_bipolynomial(const Observations& observations, const BiPolynomialOptions& given) {
+  given.check();
+  BiPolynomialOptions options = given;
+  const auto estimate = resolve_falloff(observations, options);
   const int terms = bipolynomial_term_count(options.order);
   detail::DriverSettings settings;
   settings.method = bipolynomial_name(options.order);
@@ -211,6 +225,7 @@ SolveResult solve_bipolynomial(const Observations& observations, const BiPolynom
       },
       result);
   result.parameters = options.to_json();
+  result.parameters["falloff"] = falloff_json(options, estimate);
   result.reflectance = {{"model", "bipolynomial"},
                         {"name", bipolynomial_name(options.order)},
                         {"order", options.order},
@@ -219,10 +234,11 @@ SolveResult solve_bipolynomial(const Observations& observations, const BiPolynom
                         {"y", "l.h"}};
   const SolveSummary& s = result.summary;
   result.summary.message = fmt::format(
-      "{} (T_low {:.0f}%): solved {} of {} pixels in {:.2f} s, {:.1f} iterations on average ({} too few "
-      "observations, {} degenerate)",
-      s.method, 100 * options.t_low, s.pixels_solved, s.pixels_in_mask, s.seconds, iterations,
-      s.pixels_rejected_too_few_observations, s.pixels_rejected_degenerate);
+      "{} (T_low {:.0f}%, fall-off {:.3f}{}): solved {} of {} pixels in {:.2f} s, {:.1f} iterations on "
+      "average ({} too few observations, {} degenerate)",
+      s.method, 100 * options.t_low, *options.falloff, estimate ? " estimated" : "", s.pixels_solved,
+      s.pixels_in_mask, s.seconds, iterations, s.pixels_rejected_too_few_observations,
+      s.pixels_rejected_degenerate);
   return result;
 }
 

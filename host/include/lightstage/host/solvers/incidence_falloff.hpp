@@ -1,0 +1,67 @@
+#pragma once
+// The start of the bi-polynomial fit, with the diffuse fall-off at grazing
+// incidence (beyond the dissertation; docs/solvers.md).
+//
+// Algorithm 2 starts from Lambert on the T_low set, and T_low keeps each
+// pixel's darkest lit observations: those at grazing incidence. Real
+// dielectrics (plastics, paints, the DiLiGenT ball) are darker there than
+// Lambert says, because less light is transmitted into the body at grazing
+// incidence (Fresnel; Wolff's diffuse model), so the Lambertian start leans
+// away from the lights that see the surface most obliquely. With lights in a
+// cone around the view axis the alternation cannot undo that: a radial tilt
+// and a change of ρ with l·h explain the data alike (l·h depends only on the
+// light's elevation), so the start decides the zenith.
+//
+// The start therefore fits i_j = a (t_j + κ t_j²), t_j = n·l_j: a reflectance
+// that grows linearly with the cosine of incidence, ρ ∝ 1 + κ t. κ = 0 is
+// Lambert. Unlike l·h, t varies along the lights of equal elevation, so a
+// tilt cannot imitate κ. κ is a property of the material: it is estimated
+// once per object as the median of free per-pixel fits (a, b = aκ and the
+// normal by Gauss–Newton), then each pixel's start is fitted with that κ.
+
+#include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/solvers/pixel_observations.hpp"
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <optional>
+#include <vector>
+
+namespace lightstage {
+
+struct BiPolynomialOptions;
+
+// κ is kept in this range: 1 + κ t stays positive on [0, 1].
+inline constexpr double kMinFalloff = -0.5;
+inline constexpr double kMaxFalloff = 5.0;
+
+struct FalloffPixelFit {
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  double albedo = 0;  // a
+  double kappa = 0;   // the fixed κ, or the fitted b / a
+};
+
+// Fits the observations `kept` of `pixel` from the initial normal `start`:
+// with `kappa` set, a and the normal (κ fixed); without it, a, b and the
+// normal. Returns nothing when the fit degenerates (coplanar lights, t and
+// t² indistinguishable, a ≤ 0, non-finite values).
+std::optional<FalloffPixelFit> fit_falloff_pixel(const PixelObservations& pixel,
+                                                 const std::vector<Eigen::Index>& kept,
+                                                 const Eigen::Vector3d& start, std::optional<double> kappa);
+
+struct FalloffEstimate {
+  double kappa = 0;         // median of the per-pixel fits, clamped to [kMinFalloff, kMaxFalloff]
+  double quartile_low = 0;  // the per-pixel fits' 25th and 75th percentiles
+  double quartile_high = 0;
+  std::size_t pixels = 0;  // pixels whose free fit counted
+};
+
+// κ for the object: free fits on at most `max_pixels` pixels spread evenly
+// over the mask, each on the T_low set that `options` selects. κ = 0 when
+// no pixel gives a fit. The result does not depend on options.threads.
+FalloffEstimate estimate_incidence_falloff(const Observations& observations,
+                                           const BiPolynomialOptions& options,
+                                           std::size_t max_pixels = 20000);
+
+}  // namespace lightstage
