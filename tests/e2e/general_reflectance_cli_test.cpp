@@ -138,7 +138,7 @@ TEST(GeneralReflectanceCliSweep, BenchMaterialsPrintsTheTableAndPlot) {
 // biquadratic ≤ 1.5° without noise, and monotonic, biquadratic and auto each
 // more accurate than l2 and robust at every noise level run here. Measured
 // (none / λ = 0.05 / 0.15): robust 1.47 / 1.48 / 1.80, monotonic 1.09 / 1.27 /
-// 1.70, biquadratic 0.56 / 0.87 / 1.76, auto 0.49 / 0.78 / 1.47.
+// 1.70, biquadratic 0.59 / 0.86 / 1.53, auto 0.50 / 0.79 / 1.40.
 TEST(GeneralReflectanceCliSweep, IssueTargetsHoldOnTheDefaultSweep) {
   const auto out = testing::scratch_dir();
   const auto run = run_lightstage({"bench", "materials", "--methods", "l2,robust,monotonic,biquadratic,auto",

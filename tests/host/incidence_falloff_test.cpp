@@ -127,10 +127,33 @@ TEST(IncidenceFalloff, EstimateDoesNotDependOnThreadsAndSamplesLargeMasks) {
   EXPECT_EQ(a.kappa, b.kappa);
   EXPECT_EQ(a.pixels, b.pixels);
   EXPECT_EQ(a.pixels, 240u);
-  // At most 50 of the 240 pixels, spread evenly: every 5th.
-  const auto sampled = estimate_incidence_falloff(scene.observations, one, 50);
-  EXPECT_EQ(sampled.pixels, 48u);
+  // At most 100 of the 240 pixels, spread evenly: every 3rd.
+  const auto sampled = estimate_incidence_falloff(scene.observations, one, 100);
+  EXPECT_EQ(sampled.pixels, 80u);
   EXPECT_NEAR(sampled.kappa, a.kappa, 0.2);
+  // 40 voting pixels are too few: κ stays 0.
+  const auto few = estimate_incidence_falloff(scene.observations, one, 40);
+  EXPECT_EQ(few.pixels, 40u);
+  EXPECT_EQ(few.kappa, 0.0);
+}
+
+// 12 lights (a UW-style set) leave the bilinear fit 6 observations: too few
+// to tell t from t², so no pixel votes and every start is Lambert's.
+TEST(IncidenceFalloff, SparseLightsKeepTheLambertianStart) {
+  const auto scene = make_reflectance_scene("dielectric:eta=1.5,ks=0.2", hemisphere_lights(12, 9, 0.3));
+  BiPolynomialOptions options;
+  options.order = 1;
+  const FalloffEstimate estimate = estimate_incidence_falloff(scene.observations, options);
+  EXPECT_EQ(estimate.pixels, 0u);
+  EXPECT_EQ(estimate.kappa, 0.0);
+  BiPolynomialOptions forced = options;
+  forced.falloff = -0.5;  // even a given κ is not applied to such pixels
+  BiPolynomialOptions published = options;
+  published.falloff = 0.0;
+  const SolveResult a = solve_bipolynomial(scene.observations, forced);
+  const SolveResult b = solve_bipolynomial(scene.observations, published);
+  ASSERT_GT(b.summary.pixels_solved, 0u);
+  EXPECT_EQ(cv::norm(a.normals, b.normals, cv::NORM_INF), 0.0);
 }
 
 TEST(IncidenceFalloff, BadValuesAreNamed) {

@@ -132,7 +132,8 @@ BiPolynomialPixelFit fit_bipolynomial_pixel(const PixelObservations& pixel,
   Eigen::Vector3d s;
   if (!detail::lambert_fit(pixel.lights, pixel.values, ws.kept, s) || s.norm() < 1e-12) return fit;
   Eigen::Vector3d n = s.normalized();
-  if (const double kappa = options.falloff.value_or(0.0); kappa != 0) {
+  const double kappa = options.falloff.value_or(0.0);
+  if (kappa != 0 && ws.kept.size() >= kMinFalloffObservations) {
     if (const auto start = fit_falloff_pixel(pixel, ws.kept, n, kappa)) n = start->normal;
   }
 

@@ -109,7 +109,7 @@ FalloffEstimate estimate_incidence_falloff(const Observations& observations,
     BiPolynomialWorkspace ws;
     for (std::size_t s = begin; s < end; ++s) {
       load_pixel(observations, s * stride, options.drop_saturated, pixel);
-      if (!select_low_frequency(pixel, options, ws)) continue;
+      if (!select_low_frequency(pixel, options, ws) || ws.kept.size() < kMinFalloffObservations) continue;
       Eigen::Vector3d lambert;
       if (!detail::lambert_fit(pixel.lights, pixel.values, ws.kept, lambert) || lambert.norm() < 1e-12)
         continue;
@@ -120,7 +120,7 @@ FalloffEstimate estimate_incidence_falloff(const Observations& observations,
   std::erase_if(kappas, [](double k) { return !std::isfinite(k); });
   FalloffEstimate estimate;
   estimate.pixels = kappas.size();
-  if (kappas.empty()) return estimate;
+  if (kappas.size() < kMinFalloffPixels) return estimate;
   auto quantile = [&](double q) {
     const auto at = static_cast<std::ptrdiff_t>(q * static_cast<double>(kappas.size() - 1));
     std::nth_element(kappas.begin(), kappas.begin() + at, kappas.end());

@@ -32,9 +32,16 @@ namespace lightstage {
 
 struct BiPolynomialOptions;
 
-// κ is kept in this range: 1 + κ t stays positive on [0, 1].
+// κ is kept in this range: below −0.5 the modelled shading t + κt² would
+// fall with t somewhere on [0, 1].
 inline constexpr double kMinFalloff = -0.5;
 inline constexpr double kMaxFalloff = 5.0;
+// Fewer kept observations cannot tell t from t² (the free fit has four
+// unknowns): such pixels neither vote for κ nor get the fall-off start (12
+// lights with 6 kept moved the start by 11° median for κ = −0.5).
+inline constexpr std::size_t kMinFalloffObservations = 10;
+// Fewer voting pixels than this leave κ at 0 (the Lambertian start).
+inline constexpr std::size_t kMinFalloffPixels = 50;
 
 struct FalloffPixelFit {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
@@ -58,8 +65,10 @@ struct FalloffEstimate {
 };
 
 // κ for the object: free fits on at most `max_pixels` pixels spread evenly
-// over the mask, each on the T_low set that `options` selects. κ = 0 when
-// no pixel gives a fit. The result does not depend on options.threads.
+// over the mask, each on the T_low set that `options` selects (pixels with
+// fewer than kMinFalloffObservations kept skipped). κ = 0 when fewer than
+// kMinFalloffPixels pixels give a fit. The result does not depend on
+// options.threads.
 FalloffEstimate estimate_incidence_falloff(const Observations& observations,
                                            const BiPolynomialOptions& options,
                                            std::size_t max_pixels = 20000);
