@@ -99,7 +99,7 @@ void add_solve_flags(CLI::App& sub, SolveArgs& args) {
   sub.add_option("--falloff", args.falloff,
                  "bi-polynomial and auto: the start's incidence fall-off kappa, rho ~ 1 + kappa n.l: 'auto' "
                  "estimates it from the object, 0 is the Lambertian start as published (DiLiGenT ball: "
-                 "biquadratic 2.21 deg with 0, 1.25 with auto)")
+                 "biquadratic 2.21 deg with 0, 1.23 with auto)")
       ->capture_default_str();
   sub.add_option("--estimator", args.estimator, "robust: irls-l1, ransac or none")
       ->check(CLI::IsMember({"irls-l1", "ransac", "none"}))
@@ -122,10 +122,11 @@ void add_solve_flags(CLI::App& sub, SolveArgs& args) {
 std::optional<double> parse_falloff(const std::string& text) {
   if (text == "auto") return std::nullopt;
   double value = 0;
-  const auto* end = text.data() + text.size();
-  const auto [at, error] = std::from_chars(text.data(), end, value);
-  if (text.empty() || error != std::errc{} || at != end || !std::isfinite(value))
-    fail("--falloff: expected 'auto' or a number, got '{}'", text);
+  const char* begin = text.data() + (text.starts_with('+') ? 1 : 0);  // from_chars takes no '+'
+  const char* end = text.data() + text.size();
+  const auto [at, error] = std::from_chars(begin, end, value);
+  if (begin == end || error != std::errc{} || at != end || !(value >= kMinFalloff && value <= kMaxFalloff))
+    fail("--falloff: expected 'auto' or a number in [{}, {}], got '{}'", kMinFalloff, kMaxFalloff, text);
   return value;
 }
 

@@ -74,7 +74,8 @@ struct SolveArgs {
 };
 void add_solve_flags(CLI::App& sub, SolveArgs& args);
 
-// --falloff: "auto" (estimated from the object) or a number; throws InputError naming the flag.
+// --falloff: "auto" (estimated from the object) or a number in [kMinFalloff,
+// kMaxFalloff]; throws InputError naming the flag.
 std::optional<double> parse_falloff(const std::string& text);
 
 }  // namespace lightstage::cli

@@ -9,6 +9,8 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
+#include <string>
 
 namespace lightstage {
 namespace {
@@ -76,13 +78,20 @@ TEST_F(GeneralReflectanceCli, EveryMethodSolvesAndBeatsL2) {
 }
 
 TEST_F(GeneralReflectanceCli, AGivenFalloffIsUsedAsIs) {
-  const auto out = dir_ / "biquadratic-falloff";
-  const auto run = run_lightstage({"solve", "--input", (dir_ / "stack").string(), "--method", "biquadratic",
-                                   "--falloff", "0.3", "--out", out.string()});
-  ASSERT_EQ(run.exit_code, 0) << run.err;
-  const auto falloff = read_json(out / "summary.json")["parameters"]["falloff"];
-  EXPECT_FALSE(falloff["estimated"].get<bool>());
-  EXPECT_EQ(falloff["kappa"].get<double>(), 0.3);
+  std::map<std::string, nlohmann::json> summaries;
+  for (const char* kappa : {"+0.3", "0"}) {
+    const auto out = dir_ / (std::string("biquadratic-falloff-") + kappa);
+    const auto run = run_lightstage({"solve", "--input", (dir_ / "stack").string(), "--method", "biquadratic",
+                                     "--falloff", kappa, "--out", out.string()});
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    summaries[kappa] = read_json(out / "summary.json");
+    EXPECT_FALSE(summaries[kappa]["parameters"]["falloff"]["estimated"].get<bool>());
+  }
+  EXPECT_EQ(summaries["+0.3"]["parameters"]["falloff"]["kappa"].get<double>(), 0.3);
+  EXPECT_EQ(summaries["0"]["parameters"]["falloff"]["kappa"].get<double>(), 0.0);
+  // The value reaches the start: a wrong κ on this Lambert + Cook–Torrance sphere costs accuracy.
+  EXPECT_GT(summaries["+0.3"]["error_vs_ground_truth"]["mean_deg"].get<double>(),
+            summaries["0"]["error_vs_ground_truth"]["mean_deg"].get<double>() + 0.05);
 }
 
 TEST_F(GeneralReflectanceCli, MonotonicTakesItsAzimuthFromAnotherMethod) {
@@ -172,8 +181,8 @@ TEST(GeneralReflectanceCliErrors, BadInputNamesTheFlag) {
   run = run_lightstage({"bench", "materials", "--light-cone", "5"});
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.err.find("--light-cone"), std::string::npos) << run.err;
-  // --falloff: out of range (checked before any input is read) or not a number, for solve and bench.
-  for (const char* value : {"7", "steep", ""}) {
+  // --falloff: out of range or not a number, for solve and bench, before any input is read or simulated.
+  for (const char* value : {"7", "-0.51", "steep", "", "inf", "0.3x"}) {
     run = run_lightstage(
         {"solve", "--input", "x", "--out", "y", "--method", "biquadratic", "--falloff", value});
     EXPECT_EQ(run.exit_code, 1) << value;

@@ -116,6 +116,27 @@ TEST(IncidenceFalloff, DielectricUnderConeLightsBeatsTheLambertianStart) {
             mean_error(solve_auto(scene.observations, automatic_published), scene));
 }
 
+// Noise makes T_low's ranking keep the observations near its cut only when
+// their noise is negative, which reads as a negative κ (clamped at −0.5).
+// Fitting it must not cost accuracy, over the hemisphere or in a cone.
+// Measured (fall-off against Lambertian start): hemisphere λ 0.05 0.42 / 0.43,
+// λ 0.15 1.20 / 1.38; 43° cone λ 0.05 1.59 / 1.65, λ 0.15 5.06 / 6.91.
+TEST(IncidenceFalloff, NoisyLambertianSurfacesAreNotHurt) {
+  for (const double min_z : {0.1, kConeZ}) {
+    for (const double noise : {0.05, 0.15}) {
+      const auto scene = make_reflectance_scene("lambert", hemisphere_lights(100, 7, min_z), 36, 45, noise);
+      BiPolynomialOptions options;
+      options.threads = 2;
+      const SolveResult with = solve_bipolynomial(scene.observations, options);
+      EXPECT_LT(with.parameters["falloff"]["kappa"].get<double>(), 0.0) << min_z << " " << noise;
+      BiPolynomialOptions published = options;
+      published.falloff = 0.0;
+      EXPECT_LT(mean_error(with, scene), mean_error(solve_bipolynomial(scene.observations, published), scene))
+          << "lights above z " << min_z << ", noise " << noise;
+    }
+  }
+}
+
 TEST(IncidenceFalloff, EstimateDoesNotDependOnThreadsAndSamplesLargeMasks) {
   const auto scene =
       make_reflectance_scene("dielectric:eta=1.4,ks=0.2", hemisphere_lights(60, 3, kConeZ), 20, 12);
@@ -126,14 +147,18 @@ TEST(IncidenceFalloff, EstimateDoesNotDependOnThreadsAndSamplesLargeMasks) {
   const auto b = estimate_incidence_falloff(scene.observations, two);
   EXPECT_EQ(a.kappa, b.kappa);
   EXPECT_EQ(a.pixels, b.pixels);
-  EXPECT_EQ(a.pixels, 240u);
+  EXPECT_GE(a.pixels, 235u);  // of 240: a fit that degenerates or does not converge does not vote
+  EXPECT_LE(a.pixels, 240u);
   // At most 100 of the 240 pixels, spread evenly: every 3rd.
   const auto sampled = estimate_incidence_falloff(scene.observations, one, 100);
-  EXPECT_EQ(sampled.pixels, 80u);
+  EXPECT_GE(sampled.pixels, 78u);
+  EXPECT_LE(sampled.pixels, 80u);
   EXPECT_NEAR(sampled.kappa, a.kappa, 0.2);
+  // 0 means every pixel.
+  EXPECT_EQ(estimate_incidence_falloff(scene.observations, one, 0).pixels, a.pixels);
   // 40 voting pixels are too few: κ stays 0.
   const auto few = estimate_incidence_falloff(scene.observations, one, 40);
-  EXPECT_EQ(few.pixels, 40u);
+  EXPECT_LE(few.pixels, 40u);
   EXPECT_EQ(few.kappa, 0.0);
 }
 

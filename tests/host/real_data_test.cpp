@@ -98,8 +98,8 @@ TEST(HostRealData, DiligentBallReproducesTheLeastSquaresBaseline) {
 // T_low keeps; with the published Lambertian start (falloff 0) that leaves a
 // radial bias the alternation cannot undo with lights in a 43° cone
 // (biquadratic 2.21 on the whole ball). The start with the object's
-// incidence fall-off (the default; κ ≈ 0.385 estimated) removes it: whole ball
-// biquadratic 1.25, bicubic 1.21, auto 1.39.
+// incidence fall-off (the default; κ ≈ 0.382 estimated) removes it: whole ball
+// biquadratic 1.23, bicubic 1.21, auto 1.37.
 TEST(HostRealData, DiligentBallGeneralReflectanceMethods) {
   const auto ball = data_dir("diligent/ballPNG");
   if (ball.empty()) GTEST_SKIP() << "shared data not found";

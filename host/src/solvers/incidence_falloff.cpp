@@ -16,6 +16,9 @@ namespace {
 constexpr int kMaxIterations = 30;
 constexpr double kConvergedRad = 1e-8;
 constexpr double kMaxStepRad = 0.2;  // a Gauss–Newton step never turns the normal further
+// Relative pivot below which a column counts as dependent (Eigen's default
+// only catches exact rank loss; nearly collinear t, t² would vote a wild κ).
+constexpr double kRankThreshold = 1e-9;
 
 // The model's basis in t = n·l: free {t, t²}, or fixed κ {t + κt²}.
 struct Basis {
@@ -47,21 +50,31 @@ std::optional<FalloffPixelFit> fit_falloff_pixel(const PixelObservations& pixel,
   Eigen::MatrixXd design(m, k), jacobian(m, 2 + k);
   Eigen::VectorXd target(m), residual(m), coefficients(k);
   double value[2], slope[2];
+  auto light = [&](Eigen::Index r) -> Eigen::Vector3d {
+    return pixel.lights.row(kept[static_cast<std::size_t>(r)]).transpose();
+  };
   for (Eigen::Index r = 0; r < m; ++r) target(r) = pixel.values(kept[static_cast<std::size_t>(r)]);
-  for (int iteration = 0; iteration < kMaxIterations; ++iteration) {
-    // Variable projection: the coefficients are linear given n.
+  // Variable projection: the coefficients are linear given n. False when t
+  // and t² are (numerically) indistinguishable on these lights.
+  auto project = [&]() {
     for (Eigen::Index r = 0; r < m; ++r) {
-      basis.at(n.dot(pixel.lights.row(kept[static_cast<std::size_t>(r)]).transpose()), value, slope);
+      basis.at(n.dot(light(r)), value, slope);
       for (int c = 0; c < k; ++c) design(r, c) = value[c];
     }
-    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(design);
-    if (qr.rank() < k) return std::nullopt;
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(design);
+    qr.setThreshold(kRankThreshold);
+    if (qr.rank() < k) return false;
     coefficients = qr.solve(target);
+    return coefficients.allFinite();
+  };
+  bool converged = false;
+  for (int iteration = 0; iteration < kMaxIterations && !converged; ++iteration) {
+    if (!project()) return std::nullopt;
     // One Gauss–Newton step on (tangent turn of n, coefficients) together.
     const Eigen::Vector3d u = n.unitOrthogonal();
     const Eigen::Vector3d w = n.cross(u);
     for (Eigen::Index r = 0; r < m; ++r) {
-      const Eigen::Vector3d l = pixel.lights.row(kept[static_cast<std::size_t>(r)]).transpose();
+      const Eigen::Vector3d l = light(r);
       basis.at(n.dot(l), value, slope);
       double f = 0, df = 0;
       for (int c = 0; c < k; ++c) {
@@ -73,26 +86,23 @@ std::optional<FalloffPixelFit> fit_falloff_pixel(const PixelObservations& pixel,
       jacobian(r, 0) = df * u.dot(l);
       jacobian(r, 1) = df * w.dot(l);
     }
-    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> step_qr(jacobian);
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> step_qr(jacobian);
+    step_qr.setThreshold(kRankThreshold);
     if (step_qr.rank() < 2 + k) return std::nullopt;
     Eigen::Vector2d turn = step_qr.solve(residual).head<2>();
     if (!turn.allFinite()) return std::nullopt;
+    converged = turn.norm() < kConvergedRad;
     if (turn.norm() > kMaxStepRad) turn *= kMaxStepRad / turn.norm();
     n = (n + turn(0) * u + turn(1) * w).normalized();
-    if (turn.norm() < kConvergedRad) break;
   }
-  // The coefficients at the final normal.
-  for (Eigen::Index r = 0; r < m; ++r) {
-    basis.at(n.dot(pixel.lights.row(kept[static_cast<std::size_t>(r)]).transpose()), value, slope);
-    for (int c = 0; c < k; ++c) design(r, c) = value[c];
-  }
-  coefficients = design.colPivHouseholderQr().solve(target);
-  if (!coefficients.allFinite() || !n.allFinite() || !(coefficients(0) > 0)) return std::nullopt;
+  // A fit still turning after kMaxIterations oscillates: no answer.
+  if (!converged || !project() || !n.allFinite() || !(coefficients(0) > 0)) return std::nullopt;
   FalloffPixelFit fit;
   fit.normal = n;
   fit.albedo = coefficients(0);
   fit.kappa = kappa ? *kappa : coefficients(1) / coefficients(0);
-  if (!std::isfinite(fit.kappa)) return std::nullopt;
+  fit.rms = std::sqrt((design * coefficients - target).squaredNorm() / static_cast<double>(m));
+  if (!std::isfinite(fit.kappa) || !std::isfinite(fit.rms)) return std::nullopt;
   return fit;
 }
 
@@ -100,8 +110,8 @@ FalloffEstimate estimate_incidence_falloff(const Observations& observations,
                                            const BiPolynomialOptions& options, std::size_t max_pixels) {
   check_observations(observations, "incidence fall-off");
   const std::size_t pixels = observations.pixel_count();
-  const std::size_t stride =
-      std::max<std::size_t>(1, (pixels + max_pixels - 1) / std::max<std::size_t>(max_pixels, 1));
+  const std::size_t most = max_pixels == 0 ? pixels : max_pixels;  // 0: every pixel
+  const std::size_t stride = most == 0 ? 1 : std::max<std::size_t>(1, pixels / most + (pixels % most != 0));
   const std::size_t samples = (pixels + stride - 1) / stride;
   std::vector<double> kappas(samples, std::numeric_limits<double>::quiet_NaN());
   util::parallel_chunks(samples, options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {

@@ -60,7 +60,7 @@ struct BiPolynomialPixelFit {
 
 // Reusable per-thread buffers.
 struct BiPolynomialWorkspace {
-  std::vector<Eigen::Index> candidates, kept, initial;
+  std::vector<Eigen::Index> candidates, kept;
   Eigen::MatrixXd design;
   Eigen::VectorXd target, rho, basis;
   Eigen::MatrixX3d halves;

@@ -47,24 +47,26 @@ struct FalloffPixelFit {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
   double albedo = 0;  // a
   double kappa = 0;   // the fixed κ, or the fitted b / a
+  double rms = 0;     // of the fit over the observations
 };
 
 // Fits the observations `kept` of `pixel` from the initial normal `start`:
 // with `kappa` set, a and the normal (κ fixed); without it, a, b and the
-// normal. Returns nothing when the fit degenerates (coplanar lights, t and
-// t² indistinguishable, a ≤ 0, non-finite values).
+// normal (Gauss–Newton with variable projection, at most 30 steps). Returns
+// nothing when the fit degenerates (coplanar lights, t and t² numerically
+// indistinguishable, a ≤ 0, non-finite values) or has not converged.
 std::optional<FalloffPixelFit> fit_falloff_pixel(const PixelObservations& pixel,
                                                  const std::vector<Eigen::Index>& kept,
                                                  const Eigen::Vector3d& start, std::optional<double> kappa);
 
 struct FalloffEstimate {
-  double kappa = 0;         // median of the per-pixel fits, clamped to [kMinFalloff, kMaxFalloff]
-  double quartile_low = 0;  // the per-pixel fits' 25th and 75th percentiles
-  double quartile_high = 0;
-  std::size_t pixels = 0;  // pixels whose free fit counted
+  double kappa = 0;          // median of the per-pixel fits, clamped to [kMinFalloff, kMaxFalloff]
+  double quartile_low = 0;   // the per-pixel fits' 25th and 75th percentiles (unclamped;
+  double quartile_high = 0;  // 0 with fewer than kMinFalloffPixels fits)
+  std::size_t pixels = 0;    // pixels whose free fit counted
 };
 
-// κ for the object: free fits on at most `max_pixels` pixels spread evenly
+// κ for the object: free fits on at most `max_pixels` (0 = all) pixels spread evenly
 // over the mask, each on the T_low set that `options` selects (pixels with
 // fewer than kMinFalloffObservations kept skipped). κ = 0 when fewer than
 // kMinFalloffPixels pixels give a fit. The result does not depend on
