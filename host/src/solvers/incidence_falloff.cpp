@@ -101,8 +101,7 @@ std::optional<FalloffPixelFit> fit_falloff_pixel(const PixelObservations& pixel,
   fit.normal = n;
   fit.albedo = coefficients(0);
   fit.kappa = kappa ? *kappa : coefficients(1) / coefficients(0);
-  fit.rms = std::sqrt((design * coefficients - target).squaredNorm() / static_cast<double>(m));
-  if (!std::isfinite(fit.kappa) || !std::isfinite(fit.rms)) return std::nullopt;
+  if (!std::isfinite(fit.kappa)) return std::nullopt;
   return fit;
 }
 

@@ -47,7 +47,6 @@ struct FalloffPixelFit {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
   double albedo = 0;  // a
   double kappa = 0;   // the fixed κ, or the fitted b / a
-  double rms = 0;     // of the fit over the observations
 };
 
 // Fits the observations `kept` of `pixel` from the initial normal `start`:
