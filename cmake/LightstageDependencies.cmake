@@ -49,3 +49,27 @@ endif()
 # The wire protocol: protobuf messages (libprotobuf-dev, protobuf-compiler) and zlib's CRC-32.
 find_package(Protobuf 3.12 REQUIRED)
 find_package(ZLIB REQUIRED)
+
+# The Python module (host/python): pybind11 and a Python whose numpy it can
+# import. Not in sanitizer or fuzz builds: an instrumented module cannot load
+# into an uninstrumented interpreter.
+set(LIGHTSTAGE_HAVE_PYTHON OFF)
+if(NOT LIGHTSTAGE_WITH_PYTHON STREQUAL "OFF" AND NOT LIGHTSTAGE_SANITIZE AND NOT LIGHTSTAGE_FUZZ)
+  if(NOT Python3_EXECUTABLE)
+    # The first python3 on PATH can be a private one without numpy (e.g. pyenv's);
+    # Debian's own interpreter is where python3-numpy installs.
+    find_program(LIGHTSTAGE_PATH_PYTHON NAMES python3)
+    if(LIGHTSTAGE_PATH_PYTHON)
+      execute_process(COMMAND ${LIGHTSTAGE_PATH_PYTHON} -c "import numpy" RESULT_VARIABLE _no_numpy
+                      OUTPUT_QUIET ERROR_QUIET)
+    endif()
+    if((NOT LIGHTSTAGE_PATH_PYTHON OR _no_numpy) AND EXISTS /usr/bin/python3)
+      set(Python3_EXECUTABLE /usr/bin/python3 CACHE FILEPATH "Python for the lightstage module")
+    endif()
+  endif()
+  find_package(Python3 3.9 COMPONENTS Interpreter Development.Module NumPy)
+  if(Python3_FOUND)
+    find_package(pybind11 2.6 CONFIG)
+  endif()
+endif()
+lightstage_optional_backend(PYTHON pybind11_FOUND "Python module (pybind11, numpy)")

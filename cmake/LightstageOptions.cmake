@@ -6,6 +6,9 @@ foreach(backend GPIOD LIBCAMERA LIBUSB V4L2)
   set_property(CACHE LIGHTSTAGE_WITH_${backend} PROPERTY STRINGS ${LIGHTSTAGE_BACKEND_CHOICES})
 endforeach()
 
+set(LIGHTSTAGE_WITH_PYTHON AUTO CACHE STRING "Build the Python module (AUTO, ON, OFF; never in sanitizer or fuzz builds)")
+set_property(CACHE LIGHTSTAGE_WITH_PYTHON PROPERTY STRINGS ${LIGHTSTAGE_BACKEND_CHOICES})
+
 option(LIGHTSTAGE_BUILD_TESTS "Build the tests" ON)
 option(LIGHTSTAGE_BUILD_BENCHMARKS "Build the benchmarks" ON)
 option(LIGHTSTAGE_SANITIZE "Build with AddressSanitizer and UndefinedBehaviorSanitizer" OFF)

@@ -12,6 +12,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libgpiod-dev libusb-1.0-0-dev libcamera-dev
   libprotobuf-dev protobuf-compiler zlib1g-dev
+  pybind11-dev python3-dev python3-numpy  # the Python module (host/python) and its test
   chromium  # the report viewer's headless-browser test (tests/report)
 )
 # That test drives Chromium from Node (npm ci at build time); Debian's own

@@ -8,16 +8,11 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/scripts/install-deps.sh"
 
-# The real-data tests (DiLiGenT ball, UW sets) read ../shared/data next to the
-# checkout; a clone elsewhere on this machine finds it at /work/shared/data.
-if [ -z "${LIGHTSTAGE_SHARED_DATA:-}" ]; then
-  for candidate in "$root/../shared/data" /work/shared/data; do
-    if [ -d "$candidate/diligent" ]; then
-      LIGHTSTAGE_SHARED_DATA=$(cd "$candidate" && pwd)
-      export LIGHTSTAGE_SHARED_DATA
-      break
-    fi
-  done
+# The real-data tests (DiLiGenT ball, UW sets) read LIGHTSTAGE_SHARED_DATA, or
+# else ../shared/data next to the checkout.
+if [ -z "${LIGHTSTAGE_SHARED_DATA:-}" ] && [ -d "$root/../shared/data/diligent" ]; then
+  LIGHTSTAGE_SHARED_DATA=$(cd "$root/../shared/data" && pwd)
+  export LIGHTSTAGE_SHARED_DATA
 fi
 echo "real data: ${LIGHTSTAGE_SHARED_DATA:-not found (set LIGHTSTAGE_SHARED_DATA; those tests skip)}"
 

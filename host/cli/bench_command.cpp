@@ -3,7 +3,7 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
 #include "lightstage/host/progress.hpp"
-#include "material_sweep.hpp"
+#include "lightstage/pipeline/material_sweep.hpp"
 #include "options.hpp"
 
 #include <fmt/format.h>
@@ -44,7 +44,7 @@ void add_bench(CLI::App& app) {
       "Example: lightstage bench materials --lights 100 --out out/sweep");
   bench->require_subcommand(1);
   struct Args {
-    MaterialSweepOptions sweep;
+    pipeline::MaterialSweepOptions sweep;
     std::vector<std::string> noise = {"none", "0", "0.05", "0.15", "0.3"};
     std::string out;
     OutputFlags output;
@@ -104,15 +104,15 @@ void add_bench(CLI::App& app) {
     args->sweep.noise = parse_noise_list(args->noise);
     args->sweep.check();
     Progress progress("bench materials", args->sweep.cells(), "runs", args->output.mode());
-    const MaterialSweepResult result =
-        run_material_sweep(args->sweep, [&progress](std::size_t cells) { progress.advance(cells); });
+    const pipeline::MaterialSweepResult result =
+        pipeline::run_material_sweep(args->sweep, [&progress](std::size_t cells) { progress.advance(cells); });
     progress.finish();
     nlohmann::json outputs = nlohmann::json::object();
     if (!args->out.empty()) {
       const std::filesystem::path out = args->out;
       std::filesystem::create_directories(out);
       std::ofstream(out / "materials.json") << result.to_json().dump(2) << "\n";
-      write_material_plot(out / "materials.png", result, 0, 0);
+      pipeline::write_material_plot(out / "materials.png", result, 0, 0);
       logger("host")->info("wrote {} and {}", (out / "materials.json").string(),
                            (out / "materials.png").string());
       outputs = {{"json", (out / "materials.json").string()}, {"plot", (out / "materials.png").string()}};

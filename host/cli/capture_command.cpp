@@ -2,11 +2,8 @@
 #include "commands.hpp"
 #include "options.hpp"
 
-#include "lightstage/common/rig.hpp"
 #include "lightstage/host/capture/capture_session.hpp"
-#include "lightstage/host/controller/controller_client.hpp"
-#include "lightstage/hw/cameras.hpp"
-#include "lightstage/sim/camera/sim_camera.hpp"
+#include "lightstage/pipeline/dome_connection.hpp"
 
 #include <fmt/format.h>
 
@@ -71,16 +68,8 @@ void add_capture(CLI::App& app) {
     options.exposure_us = parse_exposure_us(args->exposure);
     options.led_ids = args->leds;
     options.mode = args->output.mode();
-    const Rig rig = load_rig(args->rig);
-    hw::register_hw_cameras();
-    sim::register_sim_camera();
-    auto camera = camera::open_camera_uri(args->camera);
-    auto controller = connect_controller(args->controller);
-    if (controller->info().rig_name() != rig.name) {
-      fail("--rig '{}' is rig '{}', but the controller runs rig '{}'", args->rig, rig.name,
-           controller->info().rig_name());
-    }
-    const CaptureReport report = capture_stack(rig, *controller, *camera, options);
+    pipeline::DomeConnection dome = pipeline::connect_dome(args->rig, args->controller, args->camera);
+    const CaptureReport report = capture_stack(dome.rig, *dome.controller, *dome.camera, options);
     if (args->output.json) {
       nlohmann::json j = report.to_json();
       j["out"] = options.out.string();

@@ -1,7 +1,6 @@
 // `lightstage demo`: the pipeline end to end on the simulated dome, as three processes.
 #include "commands.hpp"
-#include "dome_demo.hpp"
-#include "methods.hpp"
+#include "lightstage/pipeline/dome_demo.hpp"
 #include "options.hpp"
 
 #include <fmt/format.h>
@@ -14,12 +13,10 @@ void add_demo(CLI::App& app) {
     std::string programs;
     std::string exposure = "auto";
     OutputFlags output;
-    DomeDemoOptions demo;
-    SolveArgs solve;
+    pipeline::DomeDemoOptions demo;
   };
   auto args = std::make_shared<Args>();
   args->demo.out = "out/demo";
-  args->solve.shadow_threshold = 0.02;  // a capture has shadows: drop them
   CLI::App* sub = app.add_subcommand(
       "demo",
       "Run the whole pipeline on the simulated dome, as on a rig.\n"
@@ -53,22 +50,17 @@ void add_demo(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--programs", args->programs,
                   "folder holding lightstage-sim and lightstage-domed (default: this program's folder)");
-  add_solve_flags(*sub, args->solve);
+  add_solve_flags(*sub, args->demo.solve);
   add_output_flags(*sub, args->output, "demo.json: the stages' results, errors against the truth, timings");
   sub->callback([sub, args] {
     apply_output_flags(*sub, args->output);
-    DomeDemoOptions demo = args->demo;
+    pipeline::DomeDemoOptions demo = args->demo;
     demo.rig = args->rig;
     demo.programs = args->programs;
     demo.capture.exposure_us = parse_exposure_us(args->exposure);
     demo.mode = args->output.mode();
-    args->solve.resolve();
-    const SolveMethod& method = find_solve_method(args->solve.method);
-    demo.method_name = method.name;
-    demo.solver = [args, &method](const Observations& observations) {
-      return method.solve(observations, args->solve);
-    };
-    const nlohmann::json summary = run_dome_demo(demo);
+    demo.solve.resolve();  // a bad flag fails before any program starts
+    const nlohmann::json summary = pipeline::run_dome_demo(demo);
     if (args->output.json) fmt::print("{}\n", summary.dump());
   });
 }

@@ -1,6 +1,6 @@
 // `lightstage eval`: angular error of a normal map against ground truth.
 #include "commands.hpp"
-#include "steps.hpp"
+#include "lightstage/host/eval/angular_error.hpp"
 
 #include <fmt/format.h>
 
@@ -27,7 +27,7 @@ void add_eval(CLI::App& app) {
     if (args->json) {
       fmt::print("{}\n", stats.to_json().dump());
     } else {
-      print_error_stats(stats);
+      fmt::print("{}\n", stats.describe());
     }
   });
 }

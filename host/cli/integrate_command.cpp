@@ -2,17 +2,8 @@
 // a depth prior to fuse with).
 #include "commands.hpp"
 
-#include "lightstage/common/error.hpp"
-#include "lightstage/common/log.hpp"
-#include "lightstage/host/io/image_io.hpp"
-#include "lightstage/host/io/mask.hpp"
-#include "lightstage/host/io/normal_map.hpp"
-#include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/progress.hpp"
-#include "lightstage/host/surface/depth_prior.hpp"
-#include "lightstage/host/surface/fusion.hpp"
-#include "lightstage/host/surface/integration.hpp"
-#include "lightstage/host/surface/surface_output.hpp"
+#include "lightstage/pipeline/integrate_folder.hpp"
 #include "options.hpp"
 
 #include <fmt/format.h>
@@ -23,94 +14,28 @@
 namespace lightstage::cli {
 namespace {
 
-struct IntegrateArgs {
-  std::string input, normals, mask, albedo, out, prior, intrinsics;
-  std::string method = "poisson";
-  std::string mesh = "ply";
-  double pixel_mm = 1.0;
-  double mean_depth = 1.0;
-  double prior_png_scale = 1.0;
-  surface::IntegrationOptions integration;
-  surface::FusionOptions fusion;
+struct IntegrateArgs : pipeline::IntegrateSettings {
   OutputFlags output;
 };
 
 // The progress line shows the share of the linear solves done (per mille).
 constexpr std::size_t kProgressSteps = 1000;
 
-cv::Mat read_albedo(const std::filesystem::path& path) {
-  const cv::Mat image = io::read_image(path);
-  if (image.type() == CV_32FC1) return image;
-  if (image.channels() != 1) fail("{}: albedo must be a grey image", path.string());
-  cv::Mat out;
-  image.convertTo(out, CV_32FC1, image.depth() == CV_16U ? 1.0 / 65535 : 1.0 / 255);
-  return out;
-}
-
 void run(const IntegrateArgs& a) {
   const auto start = std::chrono::steady_clock::now();
-  std::filesystem::path normals_path = a.normals, albedo_path = a.albedo;
-  if (!a.input.empty()) {
-    // A solve result folder: normal.png, albedo.png.
-    if (normals_path.empty()) normals_path = std::filesystem::path(a.input) / "normal.png";
-    if (albedo_path.empty() && std::filesystem::exists(std::filesystem::path(a.input) / "albedo.png"))
-      albedo_path = std::filesystem::path(a.input) / "albedo.png";
-  }
-  if (normals_path.empty()) fail("integrate: give --normals N.png or --input RESULT_DIR");
-  const io::DecodedNormals normals = io::read_normal_map(normals_path);
-  cv::Mat mask = normals.valid.clone();
-  if (!a.mask.empty()) {
-    const cv::Mat m = io::read_mask(a.mask);
-    if (m.size() != mask.size())
-      fail("{}: mask is {}x{} but the normals are {}x{}", a.mask, m.cols, m.rows, mask.cols, mask.rows);
-    mask &= m;
-  }
-  if (cv::countNonZero(mask) == 0) fail("{}: no pixel has both a normal and the mask", normals_path.string());
-  const cv::Mat albedo = albedo_path.empty() ? cv::Mat() : read_albedo(albedo_path);
-  if (!albedo.empty() && albedo.size() != mask.size())
-    fail("{}: albedo is {}x{} but the normals are {}x{}", albedo_path.string(), albedo.cols, albedo.rows,
-         mask.cols, mask.rows);
-  const surface::CameraModel camera =
-      a.intrinsics.empty()
-          ? surface::CameraModel::orthographic(mask.size(), a.pixel_mm)
-          : surface::CameraModel::perspective(mask.size(), surface::read_intrinsics(a.intrinsics));
-  surface::SurfaceResult result;
-  nlohmann::json extra = {{"normals", normals_path.string()}};
   Progress progress(a.prior.empty() ? "integrate" : "fuse", kProgressSteps, "", a.output.mode());
-  const surface::SurfaceProgress on_progress = [&progress](double fraction) {
+  const pipeline::IntegrateReport report = pipeline::integrate_folder(a, [&progress](double fraction) {
     progress.advance_to(static_cast<std::size_t>(std::lround(fraction * kProgressSteps)));
-  };
-  if (!a.prior.empty()) {
-    surface::DepthPriorOptions prior_options;
-    prior_options.png_scale = a.prior_png_scale;
-    const surface::DepthMap prior = surface::load_depth_prior(a.prior, camera, prior_options);
-    surface::FusionOptions fusion = a.fusion;
-    fusion.preserve_discontinuities = a.integration.preserve_discontinuities;
-    result = surface::fuse_depth_normals(prior.depth, prior.valid, normals.normals, mask, camera, fusion,
-                                         on_progress);
-    extra["fusion"] = fusion.to_json();
-    extra["prior"] = a.prior;
-  } else {
-    surface::IntegrationOptions integration = a.integration;
-    integration.method = surface::parse_integration_method(a.method);
-    integration.perspective_mean_depth = a.mean_depth;
-    result = surface::integrate_normals(normals.normals, mask, camera, integration, on_progress);
-    extra["integration"] = integration.to_json();
-  }
+  });
   progress.finish();
-  surface::SurfaceFiles files;
-  files.ply = a.mesh == "ply" || a.mesh == "both";
-  files.obj = a.mesh == "obj" || a.mesh == "both";
-  const nlohmann::json summary =
-      surface::write_surface_outputs(a.out, result, camera, normals.normals, albedo, files, extra);
   if (a.output.json) {
-    nlohmann::json j = summary;
+    nlohmann::json j = report.summary;
     j["out"] = a.out;
     j["total_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     fmt::print("{}\n", j.dump());
   } else if (a.output.human()) {
-    fmt::print("surface of {} pixels in {:.2f} s ({} solver iterations) -> {}\n", result.stats.pixels,
-               result.stats.seconds, result.stats.solver_iterations, a.out);
+    fmt::print("surface of {} pixels in {:.2f} s ({} solver iterations) -> {}\n", report.stats.pixels,
+               report.stats.seconds, report.stats.solver_iterations, a.out);
   }
 }
 

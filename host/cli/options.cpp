@@ -3,12 +3,11 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
 #include "lightstage/sim/scene_file.hpp"
-#include "methods.hpp"
+#include "lightstage/pipeline/solve_methods.hpp"
+#include "shape_prior_args.hpp"
 
 #include <fmt/format.h>
 
-#include <charconv>
-#include <cmath>
 
 namespace lightstage::cli {
 
@@ -81,11 +80,11 @@ void add_simulate_flags(CLI::App& sub, SimulateArgs& args) {
   sub.add_option("--threads", o.threads, "render threads (0 = all cores)")->capture_default_str();
 }
 
-void add_solve_flags(CLI::App& sub, SolveArgs& args) {
+void add_solve_flags(CLI::App& sub, pipeline::SolveSettings& args) {
   std::string methods;
-  for (const auto& method : solve_methods()) methods += fmt::format("\n  {}: {}", method.name, method.help);
+  for (const auto& method : pipeline::solve_methods()) methods += fmt::format("\n  {}: {}", method.name, method.help);
   sub.add_option("--method", args.method, "solver (docs/solvers.md):" + methods)
-      ->check(CLI::IsMember(solve_method_names()))
+      ->check(CLI::IsMember(pipeline::solve_method_names()))
       ->capture_default_str();
   sub.add_option("--shadow-threshold", args.shadow_threshold,
                  "drop observations at or below T (values after division by full scale and light intensity); "
@@ -117,48 +116,6 @@ void add_solve_flags(CLI::App& sub, SolveArgs& args) {
   sub.add_flag("--no-clamp", args.no_clamp, "do not clamp normalised values to <= 1");
   sub.add_option("--threads", args.threads, "solver threads (0 = all cores)");
   add_shape_prior_flags(sub, args.shape_prior);
-}
-
-std::optional<double> parse_falloff(const std::string& text) {
-  if (text == "auto") return std::nullopt;
-  double value = 0;
-  const char* begin = text.data() + (text.starts_with('+') ? 1 : 0);  // from_chars takes no '+'
-  const char* end = text.data() + text.size();
-  const auto [at, error] = std::from_chars(begin, end, value);
-  if (begin == end || error != std::errc{} || at != end || !(value >= kMinFalloff && value <= kMaxFalloff))
-    fail("--falloff: expected 'auto' or a number in [{}, {}], got '{}'", kMinFalloff, kMaxFalloff, text);
-  return value;
-}
-
-void SolveArgs::set_progress(const SolveProgress& progress) {
-  l2.progress = robust.progress = monotonic.progress = bipolynomial.progress = automatic.progress = progress;
-  shape_prior.options.progress = progress;
-}
-
-void SolveArgs::resolve() {
-  radiometry.clamp_to_one = !no_clamp;
-  robust.estimator = parse_robust_estimator(estimator);
-  if (azimuth_from != "isotropy") find_solve_method(azimuth_from);  // names --method's list when unknown
-  auto& a = automatic;
-  if (shadow_threshold) {
-    l2.shadow_threshold = *shadow_threshold;
-    robust.shadow_threshold = monotonic.shadow_threshold = bipolynomial.shadow_threshold = *shadow_threshold;
-    a.monotonic.shadow_threshold = a.bipolynomial.shadow_threshold = *shadow_threshold;
-  }
-  if (t_low) l2.t_low = robust.t_low = bipolynomial.t_low = a.bipolynomial.t_low = *t_low;
-  if (min_observations)
-    l2.min_observations = robust.min_observations = monotonic.min_observations = *min_observations;
-  if (max_iterations) bipolynomial.max_iterations = a.bipolynomial.max_iterations = *max_iterations;
-  bipolynomial.falloff = a.bipolynomial.falloff = parse_falloff(falloff);
-  a.monotonic.gamma = monotonic.gamma;
-  a.monotonic.plateau_tolerance = monotonic.plateau_tolerance;
-  if (threads) l2.threads = robust.threads = monotonic.threads = bipolynomial.threads = a.threads = *threads;
-  // The chosen method's monotonic and bi-polynomial flags are checked before
-  // any input is read: a bad value fails at once, naming its flag. (Only the
-  // chosen method's: l2 takes --shadow-threshold -1, which they refuse.)
-  if (method == "monotonic") monotonic.check();
-  if (method == "bilinear" || method == "biquadratic" || method == "bicubic") bipolynomial.check();
-  if (method == "auto") a.check();
 }
 
 }  // namespace lightstage::cli

@@ -3,19 +3,11 @@
 // takes them.
 
 #include "lightstage/host/progress.hpp"
-#include "lightstage/host/radiometry.hpp"
-#include "lightstage/host/solvers/auto.hpp"
-#include "lightstage/host/solvers/bipolynomial.hpp"
-#include "lightstage/host/solvers/lambertian.hpp"
-#include "lightstage/host/solvers/monotonic.hpp"
-#include "lightstage/host/solvers/robust.hpp"
+#include "lightstage/pipeline/solve_settings.hpp"
 #include "lightstage/sim/simulate.hpp"
-#include "shape_prior_args.hpp"
 
 #include <CLI/CLI.hpp>
 
-#include <memory>
-#include <optional>
 #include <string>
 
 namespace lightstage::cli {
@@ -50,32 +42,7 @@ struct SimulateArgs {
 };
 void add_simulate_flags(CLI::App& sub, SimulateArgs& args);
 
-// Flags of `solve` (and `demo`): the Lambertian solver and radiometry.
-struct SolveArgs {
-  std::string method = "l2";
-  L2Options l2;
-  RobustOptions robust;
-  MonotonicOptions monotonic;
-  BiPolynomialOptions bipolynomial;
-  AutoOptions automatic;
-  ShapePriorArgs shape_prior;         // --method shape-prior (shape_prior_args.hpp)
-  std::string estimator = "irls-l1";  // --estimator, robust
-  std::string azimuth_from =
-      "robust";  // --azimuth-from, monotonic (robust: better on the sweep and the ball)
-  // Flags every method shares: when given, resolve() copies them into each method's options.
-  std::optional<double> shadow_threshold, t_low;
-  std::optional<int> min_observations, threads, max_iterations;
-  std::string falloff = "auto";  // --falloff auto|K: bi-polynomial and auto (incidence_falloff.hpp)
-  RadiometryOptions radiometry;
-  bool no_clamp = false;
-  void resolve();
-  // Gives every method's options the same progress report (solve_result.hpp).
-  void set_progress(const SolveProgress& progress);
-};
-void add_solve_flags(CLI::App& sub, SolveArgs& args);
-
-// --falloff: "auto" (estimated from the object) or a number in [kMinFalloff,
-// kMaxFalloff]; throws InputError naming the flag.
-std::optional<double> parse_falloff(const std::string& text);
+// Flags of `solve` (and `demo`): every method's options (pipeline/solve_settings.hpp).
+void add_solve_flags(CLI::App& sub, pipeline::SolveSettings& settings);
 
 }  // namespace lightstage::cli

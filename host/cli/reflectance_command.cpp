@@ -1,12 +1,11 @@
 // `lightstage reflectance`: fit reflectance models to a stack with known normals.
-#include <fstream>
 #include "commands.hpp"
 #include "lightstage/common/error.hpp"
-#include "lightstage/host/io/normal_map.hpp"
-#include "lightstage/host/io/stack_io.hpp"
-#include "lightstage/host/reflectance/reflectometry.hpp"
+#include "lightstage/pipeline/reflectometry_folder.hpp"
 
 #include <fmt/format.h>
+
+#include <fstream>
 
 namespace lightstage::cli {
 
@@ -38,39 +37,27 @@ void add_reflectance(CLI::App& app) {
   sub->add_option("--out", args->out, "folder for reflectance.json");
   sub->add_flag("--json", args->json, "print the JSON result on stdout");
   sub->callback([args] {
-    const ImageStack stack = io::load_stack(args->input);
-    cv::Mat normals;
-    if (!args->normals.empty()) {
-      normals = io::read_normal_map(args->normals).normals;
-    } else if (stack.ground_truth && !stack.ground_truth->normals.empty()) {
-      normals = stack.ground_truth->normals;
-    } else {
-      fail("--normals: {} holds no Normal_gt.png; give a normal map", args->input);
-    }
-    RadiometryOptions radiometry;
-    radiometry.clamp_to_one = !args->no_clamp;
-    const Observations observations = make_observations(stack, radiometry);
-    const ReflectanceSamples samples = collect_samples(observations, normals, args->samples);
-    std::vector<ReflectanceFit> fits = {fit_lambert(samples), fit_bipolynomial_model(samples, 1),
-                                        fit_bipolynomial_model(samples, 2),
-                                        fit_bipolynomial_model(samples, 3), fit_cook_torrance(samples)};
-    nlohmann::json result = {{"input", args->input},
-                             {"samples", samples.size()},
-                             {"t_low", args->samples.t_low},
-                             {"shadow_threshold", args->samples.shadow_threshold},
-                             {"fits", nlohmann::json::array()}};
-    for (const auto& fit : fits) result["fits"].push_back(fit.to_json());
+    pipeline::ReflectometrySettings settings;
+    settings.input = args->input;
+    settings.normals = args->normals;
+    settings.samples = args->samples;
+    settings.clamp_to_one = !args->no_clamp;
+    const pipeline::ReflectometryReport report = pipeline::fit_stack_reflectance(settings);
+    const nlohmann::json& result = report.json;
+    const auto& fits = report.fits;
     if (args->json) {
       fmt::print("{}\n", result.dump());
     } else {
       fmt::print("{} samples; fit errors of rho*(n.l) against the values:\n{:<14}{:>12}{:>12}{:>14}\n",
-                 samples.size(), "model", "RMSE", "MAE", "RMSE / mean");
+                 report.samples, "model", "RMSE", "MAE", "RMSE / mean");
       for (const auto& fit : fits)
         fmt::print("{:<14}{:>12.5f}{:>12.5f}{:>14.4f}\n", fit.model, fit.rmse, fit.mae, fit.relative_rmse);
     }
     if (!args->out.empty()) {
       std::filesystem::create_directories(args->out);
-      std::ofstream(std::filesystem::path(args->out) / "reflectance.json") << result.dump(2) << "\n";
+      std::ofstream file(std::filesystem::path(args->out) / "reflectance.json");
+      file << result.dump(2) << "\n";
+      if (!file) fail("{}: cannot write", (std::filesystem::path(args->out) / "reflectance.json").string());
     }
   });
 }

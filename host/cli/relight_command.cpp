@@ -1,9 +1,8 @@
 // `lightstage relight`: render a solved object under new lights.
-#include <fstream>
 #include "commands.hpp"
 #include "lightstage/common/error.hpp"
-#include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/reflectance/relight.hpp"
+#include "lightstage/pipeline/relight_folder.hpp"
 
 #include <fmt/format.h>
 
@@ -57,45 +56,14 @@ void add_relight(CLI::App& app) {
       const auto ring = turntable_lights(args->turntable, args->elevation);
       lights.insert(lights.end(), ring.begin(), ring.end());
     }
-    if (lights.empty()) fail("relight: give at least one --light x,y,z or --turntable N");
-    const RelightModel model = load_relight_model(args->input);
-    std::vector<cv::Mat> frames;
-    std::vector<float> all;
-    for (const auto& l : lights) {
-      frames.push_back(relight(model, l));
-      for (int y = 0; y < frames.back().rows; ++y)
-        for (int x = 0; x < frames.back().cols; ++x)
-          if (model.solved.at<std::uint8_t>(y, x) != 0) all.push_back(frames.back().at<float>(y, x));
-    }
-    double scale = args->scale;
-    if (!(scale > 0)) {
-      scale = 1;
-      if (!all.empty()) {
-        const auto at =
-            all.begin() + static_cast<std::ptrdiff_t>(0.995 * static_cast<double>(all.size() - 1));
-        std::nth_element(all.begin(), at, all.end());
-        if (*at > 0) scale = *at;
-      }
-    }
-    const std::filesystem::path out = args->out;
-    std::filesystem::create_directories(out);
-    nlohmann::json summary = {{"input", args->input},
-                              {"scale", scale},
-                              {"model", model.order > 0 ? "bipolynomial" : "lambert"},
-                              {"order", model.order},
-                              {"frames", nlohmann::json::array()}};
-    for (std::size_t i = 0; i < frames.size(); ++i) {
-      cv::Mat scaled = frames[i] / scale, image;
-      cv::min(scaled, 1.0, scaled);
-      scaled.convertTo(image, CV_16UC1, 65535.0);
-      const std::string name = fmt::format("relit_{:03d}.png", i);
-      io::write_png16(out / name, image);
-      const Vec3 l = lights[i].normalized();
-      summary["frames"].push_back({{"file", name}, {"light", {l.x(), l.y(), l.z()}}});
-    }
-    std::ofstream(out / "relight.json") << summary.dump(2) << "\n";
-    fmt::print("relit {} frames ({} model) -> {}\n", frames.size(),
-               model.order > 0 ? "bi-polynomial" : "Lambertian", out.string());
+    pipeline::RelightSettings settings;
+    settings.input = args->input;
+    settings.out = args->out;
+    settings.lights = lights;
+    settings.scale = args->scale;
+    const nlohmann::json summary = pipeline::relight_folder(settings);
+    fmt::print("relit {} frames ({} model) -> {}\n", summary["frames"].size(),
+               summary["order"].get<int>() > 0 ? "bi-polynomial" : "Lambertian", args->out);
   });
 }
 

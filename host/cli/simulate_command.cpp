@@ -5,29 +5,21 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
 #include "lightstage/common/rig.hpp"
-#include "lightstage/host/io/pfm.hpp"
-#include "lightstage/host/io/stack_io.hpp"
 #include "lightstage/host/progress.hpp"
-#include "lightstage/sim/natural_capture.hpp"
 #include "lightstage/sim/scene_file.hpp"
+#include "lightstage/pipeline/simulate_folder.hpp"
 #include "options.hpp"
-#include "steps.hpp"
 
 #include <fmt/format.h>
 
 #include <chrono>
-#include <fstream>
 
 namespace lightstage::cli {
 namespace {
 
 // Flags of --lighting natural.
-struct NaturalArgs {
+struct NaturalArgs : pipeline::NaturalSimulation {
   std::string lighting = "dome";
-  std::string environment = "area-lights";
-  std::string response = "random";
-  int frames = sim::NaturalLightingOptions{}.images;
-  int prior_beta = 3;
 };
 
 // Flags that only one of the two lightings uses: giving one with the other is an error, not ignored.
@@ -50,90 +42,6 @@ void check_lighting_flags(const CLI::App& sub, const NaturalArgs& natural) {
     fail("--frames: must be in 1..10000, got {}", natural.frames);
   if (natural.prior_beta < 0 || natural.prior_beta > 5)
     fail("--prior-beta: must be 0 (no prior.pfm) or 1..5, got {}", natural.prior_beta);
-}
-
-sim::NaturalLightingKind parse_environment(const std::string& text) {
-  if (text == "area-lights") return sim::NaturalLightingKind::kAreaLights;
-  if (text == "sh") return sim::NaturalLightingKind::kSphericalHarmonics;
-  fail("--environment: '{}' is neither area-lights nor sh", text);
-}
-
-// Renders the scene under natural lighting (natural_capture.hpp) and writes the
-// stack, a degraded depth prior and, for a pinhole camera, its intrinsics.
-nlohmann::json simulate_natural_to_folder(const std::filesystem::path& rig_path,
-                                          const sim::SimulateOptions& options, const NaturalArgs& args,
-                                          const std::filesystem::path& out, OutputMode mode) {
-  options.check();
-  const Rig rig = load_rig(rig_path);
-  sim::NaturalCaptureOptions capture;
-  capture.lighting.kind = parse_environment(args.environment);
-  capture.lighting.images = args.frames;
-  capture.lighting.seed = options.seed;
-  capture.seed = options.seed;
-  capture.response = sim::parse_response_mode(args.response);
-  if (options.sensor.bit_depth) capture.bit_depth = *options.sensor.bit_depth;
-  capture.check();
-  const auto start = std::chrono::steady_clock::now();
-  Progress progress("simulate", static_cast<std::size_t>(args.frames), "frames", mode);
-  const sim::NaturalCapture natural = sim::simulate_natural(
-      rig, options, capture, [&progress](std::size_t frames) { progress.advance(frames); });
-  progress.finish();
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  nlohmann::json simulation = sim::describe(rig, options);
-  simulation["lighting"] = "natural";
-  const nlohmann::json manifest = {
-      {"source", "simulated"},
-      {"rig", {{"name", rig.name}, {"file", rig_path.string()}}},
-      {"simulation", simulation},
-      {"natural_capture", natural.describe()},
-  };
-  io::write_stack(out, natural.stack, manifest);
-
-  // What `solve --method shape-prior` needs besides the stack: the prior and the camera.
-  const sim::Camera camera =
-      sim::make_camera(rig.camera, sim::resolve_scene(options.scene).camera, options.width, options.height);
-  const bool pinhole = camera.model == CameraModel::kPinhole;
-  nlohmann::json solve_flags = nlohmann::json::object();
-  if (pinhole) {
-    // The host's pixel centres are at integer coordinates (surface/camera.hpp), the sim's at +0.5.
-    std::ofstream k(out / "K.txt");
-    k << fmt::format("{} 0 {}\n0 {} {}\n0 0 1\n", camera.focal_px, camera.width / 2.0 - 0.5, camera.focal_px,
-                     camera.height / 2.0 - 0.5);
-    if (!k) fail("{}: cannot write", (out / "K.txt").string());
-    solve_flags["intrinsics"] = (out / "K.txt").string();
-  } else {
-    solve_flags["pixel_mm"] = camera.pixel_pitch_mm;
-  }
-  nlohmann::json summary = {{"stack", out.string()},
-                            {"lighting", "natural"},
-                            {"environment", args.environment},
-                            {"response", args.response},
-                            {"frames", natural.stack.frames.size()},
-                            {"width", natural.stack.width()},
-                            {"height", natural.stack.height()},
-                            {"seconds", seconds}};
-  if (args.prior_beta > 0) {
-    const cv::Mat& truth = natural.stack.ground_truth->depth;
-    cv::Mat prior = sim::degrade_depth(truth, natural.stack.mask,
-                                       sim::PriorDegradation::beta(args.prior_beta), options.seed + 1);
-    if (pinhole) {
-      // The sim's depth is the height z in the dome frame; a perspective prior is the distance along the
-      // axis.
-      for (int r = 0; r < prior.rows; ++r)
-        for (int c = 0; c < prior.cols; ++c)
-          if (natural.stack.mask.at<std::uint8_t>(r, c))
-            prior.at<float>(r, c) = static_cast<float>(camera.position_mm.z()) - prior.at<float>(r, c);
-    }
-    io::write_pfm(out / "prior.pfm", prior);
-    summary["prior"] = (out / "prior.pfm").string();
-    summary["prior_beta"] = args.prior_beta;
-    solve_flags["prior"] = (out / "prior.pfm").string();
-  }
-  summary["shape_prior_flags"] = solve_flags;
-  logger("host")->info("simulated {} frames of {}x{} under natural lighting in {:.2f} s into {}",
-                       natural.stack.frames.size(), natural.stack.width(), natural.stack.height(), seconds,
-                       out.string());
-  return summary;
 }
 
 // The `solve` command line that fits a natural-lighting stack.
@@ -214,12 +122,15 @@ void add_simulate(CLI::App& app) {
     const auto start = std::chrono::steady_clock::now();
     nlohmann::json summary;
     if (args->natural.lighting == "natural") {
-      summary = simulate_natural_to_folder(args->rig, args->sim.options, args->natural, args->out,
-                                           args->output.mode());
+      Progress progress("simulate", static_cast<std::size_t>(args->natural.frames), "frames",
+                        args->output.mode());
+      summary = pipeline::simulate_natural_to_folder(args->rig, args->sim.options, args->natural, args->out,
+                                                     [&progress](std::size_t frames) { progress.advance(frames); });
+      progress.finish();
     } else {
       const Rig rig = load_rig(args->rig);
       Progress progress("simulate", rig.leds.size(), "frames", args->output.mode());
-      summary = simulate_to_folder(args->rig, args->sim.options, args->out,
+      summary = pipeline::simulate_to_folder(args->rig, args->sim.options, args->out,
                                    [&progress](std::size_t frames) { progress.advance(frames); });
       progress.finish();
       summary["lighting"] = "dome";

@@ -1,9 +1,9 @@
 // `lightstage solve`: normals and albedo from a stack folder.
 #include "commands.hpp"
 #include "lightstage/host/progress.hpp"
-#include "methods.hpp"
+#include "lightstage/pipeline/solve_folder.hpp"
+#include "lightstage/pipeline/solve_methods.hpp"
 #include "options.hpp"
-#include "steps.hpp"
 
 #include <fmt/format.h>
 
@@ -11,34 +11,14 @@
 #include <memory>
 
 namespace lightstage::cli {
-namespace {
-
-// What the progress line counts for `method`: pixels for the per-pixel
-// methods (twice over for monotonic with another method's azimuth, which
-// solves every pixel first), cost evaluations for shape-prior's refinement.
-struct ProgressPlan {
-  std::string unit = "px";
-  std::size_t total = 0;
-};
-
-ProgressPlan plan_progress(const SolveArgs& args, const Observations& observations) {
-  if (args.method == "shape-prior") {
-    const auto& o = args.shape_prior.options;
-    return {"evaluations", o.refine ? static_cast<std::size_t>(o.max_evaluations) : 0};
-  }
-  const std::size_t passes = args.method == "monotonic" && args.azimuth_from != "isotropy" ? 2 : 1;
-  return {"px", observations.pixel_count() * passes};
-}
-
-}  // namespace
 
 void add_solve(CLI::App& app) {
   struct Args {
     std::string input;
     std::string out;
     OutputFlags output;
-    SolveArgs solve;
-    SolveCalibration calibration;
+    pipeline::SolveSettings solve;
+    pipeline::SolveCalibration calibration;
   };
   auto args = std::make_shared<Args>();
   CLI::App* sub = app.add_subcommand(
@@ -68,17 +48,16 @@ void add_solve(CLI::App& app) {
     apply_output_flags(*sub, args->output);
     const auto start = std::chrono::steady_clock::now();
     args->solve.resolve();
-    const SolveMethod& method = find_solve_method(args->solve.method);
     std::unique_ptr<Progress> progress;
-    const auto report = solve_folder(
+    const auto report = pipeline::solve_folder(
         args->input, args->solve.radiometry,
         [&](const Observations& observations) {
-          const ProgressPlan plan = plan_progress(args->solve, observations);
-          progress = std::make_unique<Progress>("solve " + args->solve.method, plan.total, plan.unit,
+          const pipeline::SolveWork work = pipeline::solve_work(args->solve, observations);
+          progress = std::make_unique<Progress>("solve " + args->solve.method, work.total, work.unit,
                                                 args->output.mode());
-          SolveArgs solve = args->solve;
+          pipeline::SolveSettings solve = args->solve;
           solve.set_progress([p = progress.get()](std::size_t items) { p->advance(items); });
-          SolveResult result = method.solve(observations, solve);
+          SolveResult result = pipeline::solve_with(observations, solve);
           progress->finish();
           return result;
         },
@@ -94,7 +73,7 @@ void add_solve(CLI::App& app) {
       fmt::print("{}: solved {} of {} pixels in {:.2f} s -> {}\n", s.value("method", args->solve.method),
                  s.value("pixels_solved", std::size_t{0}), s.value("pixels_in_mask", std::size_t{0}), seconds,
                  args->out);
-      if (report.error) print_error_stats(*report.error);
+      if (report.error) fmt::print("{}\n", report.error->describe());
     }
   });
 }

@@ -1,13 +1,15 @@
 #pragma once
 // Synthetic data for the general-reflectance tests: a grid of normals over
-// the visible hemisphere seen under random distant lights (or near LEDs of
-// the sim dome), shaded exactly by a sim BRDF. Small on purpose (the tests
+// the visible hemisphere seen under random distant lights (the material
+// sweep's renderer, pipeline/synthetic_observations.hpp) or near LEDs of the
+// sim dome, shaded exactly by a sim BRDF. Small on purpose (the tests
 // also run under sanitizers); the big sweeps live in `lightstage bench materials`.
 
 #include "lightstage/common/geometry.hpp"
 #include "lightstage/common/rig.hpp"
 #include "lightstage/host/near_lights.hpp"
 #include "lightstage/host/radiometry.hpp"
+#include "lightstage/pipeline/synthetic_observations.hpp"
 #include "lightstage/sim/material.hpp"
 
 #include <opencv2/core.hpp>
@@ -18,24 +20,10 @@
 
 namespace lightstage::testing {
 
-struct ReflectanceScene {
-  Observations observations;
-  cv::Mat truth;  // CV_32FC3
-};
+using ReflectanceScene = pipeline::SyntheticScene;
 
 inline Eigen::MatrixX3d hemisphere_lights(int count, unsigned seed, double min_z = 0.1) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> gauss;
-  Eigen::MatrixX3d lights(count, 3);
-  for (int j = 0; j < count;) {
-    Vec3 v(gauss(rng), gauss(rng), gauss(rng));
-    if (v.norm() < 1e-9) continue;
-    v.normalize();
-    v.z() = std::abs(v.z());
-    if (v.z() < min_z) continue;
-    lights.row(j++) = v.transpose();
-  }
-  return lights;
+  return pipeline::random_hemisphere_lights(count, min_z, seed);
 }
 
 // width × height normals: azimuth over columns, elevation 15°..88° over rows.
@@ -49,33 +37,13 @@ inline Vec3 grid_normal(int x, int y, int width, int height) {
 inline ReflectanceScene make_reflectance_scene(const std::string& material_preset,
                                                const Eigen::MatrixX3d& lights, int width = 12, int height = 8,
                                                double noise = -1, unsigned seed = 3) {
-  const sim::Material material = sim::parse_material(material_preset);
-  ReflectanceScene scene;
-  Observations& obs = scene.observations;
-  obs.size = cv::Size(width, height);
-  obs.mask = cv::Mat(obs.size, CV_8UC1, cv::Scalar::all(255));
-  obs.lights = lights;
-  obs.intensities.resize(width * height, lights.rows());
-  obs.saturated = FlagMatrix::Constant(width * height, lights.rows(), false);
-  scene.truth = cv::Mat(obs.size, CV_32FC3);
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> gauss;
-  for (int y = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x) {
-      const int p = static_cast<int>(obs.pixels.size());
-      obs.pixels.emplace_back(x, y);
-      const Vec3 n = grid_normal(x, y, width, height);
-      scene.truth.at<cv::Vec3f>(y, x) =
-          cv::Vec3f(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
-      for (Eigen::Index j = 0; j < lights.rows(); ++j) {
-        double value = 0.5 * material.shading(0, 0, n, lights.row(j).transpose(), Vec3::UnitZ());
-        if (noise >= 0)
-          value = std::round(std::clamp(value + noise * value * gauss(rng), 0.0, 1.0) * 65535) / 65535;
-        obs.intensities(p, j) = static_cast<float>(value);
-      }
-    }
-  }
-  return scene;
+  pipeline::SyntheticOptions options;
+  options.scale = 0.5;
+  options.noise = noise;
+  options.seed = seed;
+  return pipeline::render_synthetic(
+      sim::parse_material(material_preset), cv::Size(width, height),
+      [width, height](int x, int y) { return grid_normal(x, y, width, height); }, lights, options);
 }
 
 // The sim dome's LEDs as near point lights over a small patch of surface

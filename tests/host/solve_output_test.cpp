@@ -1,5 +1,6 @@
 #include "lightstage/host/io/solve_output.hpp"
 
+#include "lightstage/common/error.hpp"
 #include "lightstage/common/version.hpp"
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/normal_map.hpp"
@@ -8,6 +9,7 @@
 #include "lightstage/testing/paths.hpp"
 #include "synthetic.hpp"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -52,6 +54,73 @@ TEST(HostSolveOutput, WritesEveryFileAndASummary) {
   EXPECT_EQ(summary["parameters"]["t_low"], 1.0);
   EXPECT_EQ(summary["stack_images"], 8);
   EXPECT_TRUE(summary.contains("time"));
+}
+
+TEST(HostSolveFolder, ReadsBackWhatWasWritten) {
+  const auto scene = testing::make_scene(20, 10, 8, 3, false);
+  SolveResult result = solve_lambertian(scene.observations, L2Options{});
+  result.confidence = cv::Mat(result.normals.size(), CV_32FC1, cv::Scalar(0.25));
+  const auto dir = testing::scratch_dir() / "out";
+  const auto written = io::write_solve_outputs(dir, result, "/some/input");
+
+  const io::SolveFolder folder = io::read_solve_folder(dir);
+  EXPECT_EQ(folder.summary, written);
+  EXPECT_EQ(folder.method(), "l2");
+  EXPECT_EQ(cv::countNonZero(folder.solved), 200);
+  EXPECT_LT(cv::norm(folder.normals, result.normals, cv::NORM_INF), 1e-4);
+  EXPECT_FALSE(folder.albedo_from_png);
+  EXPECT_EQ(cv::norm(folder.albedo, result.albedo, cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(folder.residual, result.residual, cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(folder.confidence, result.confidence, cv::NORM_INF), 0);
+  EXPECT_DOUBLE_EQ(folder.albedo_png_scale, written["albedo_png_scale"].get<double>());
+  EXPECT_TRUE(folder.coefficients.empty());
+  EXPECT_EQ(folder.reflectance_order, 0);
+  // The display albedo is what albedo.png shows.
+  const cv::Mat png = io::read_image(dir / "albedo.png");
+  cv::Mat shown;
+  png.convertTo(shown, CV_32FC1, 1.0 / 65535);
+  EXPECT_LT(cv::norm(folder.display_albedo(), shown, cv::NORM_INF), 1.0 / 65535 + 1e-6);
+}
+
+TEST(HostSolveFolder, AlbedoFallsBackToThePngTimesItsScale) {
+  const auto scene = testing::make_scene(20, 10, 8, 3, false);
+  const SolveResult result = solve_lambertian(scene.observations, L2Options{});
+  const auto dir = testing::scratch_dir() / "out";
+  const auto written = io::write_solve_outputs(dir, result, "/some/input");
+  std::filesystem::remove(dir / "albedo.pfm");
+  const io::SolveFolder folder = io::read_solve_folder(dir);
+  ASSERT_TRUE(folder.albedo_from_png);
+  const double scale = written["albedo_png_scale"];
+  for (int y = 0; y < result.albedo.rows; ++y) {
+    for (int x = 0; x < result.albedo.cols; ++x) {
+      const float a = result.albedo.at<float>(y, x);
+      if (a < scale) EXPECT_NEAR(folder.albedo.at<float>(y, x), a, scale / 65535.0) << x << "," << y;
+    }
+  }
+}
+
+TEST(HostSolveFolder, RefusesMapsOfAnotherSizeAndBadSummaries) {
+  const auto scene = testing::make_scene(20, 10, 8, 3, false);
+  const SolveResult result = solve_lambertian(scene.observations, L2Options{});
+  const auto dir = testing::scratch_dir() / "out";
+  io::write_solve_outputs(dir, result, "/some/input");
+  io::write_pfm(dir / "residual.pfm", cv::Mat(3, 4, CV_32FC1, cv::Scalar(0)));
+  EXPECT_THROW(
+      {
+        try {
+          io::read_solve_folder(dir);
+        } catch (const InputError& e) {
+          EXPECT_THAT(e.what(), ::testing::HasSubstr("residual.pfm"));
+          throw;
+        }
+      },
+      InputError);
+  io::write_pfm(dir / "residual.pfm", result.residual);
+  std::ofstream(dir / "summary.json") << "[1, 2]";
+  EXPECT_THROW(io::read_solve_folder(dir), InputError);
+  std::ofstream(dir / "summary.json") << "{ not json";
+  EXPECT_THROW(io::read_solve_folder(dir), InputError);
+  EXPECT_THROW(io::read_solve_folder(dir / "missing"), InputError);
 }
 
 }  // namespace

@@ -22,10 +22,9 @@ int main(int argc, char** argv) {
   }
   try {
     const std::filesystem::path result = argv[1];
-    nlohmann::json summary = nlohmann::json::object();
-    if (std::ifstream in(result / "summary.json"); in) summary = nlohmann::json::parse(in);
     std::vector<std::string> notes;
-    const auto model = lightstage::report::load_surface_model(result, summary, 1 << 30, notes);
+    const auto model =
+        lightstage::report::load_surface_model(lightstage::io::read_solve_folder(result), 1 << 30, notes);
     const lightstage::Vec3 light(std::stod(argv[2]), std::stod(argv[3]), std::stod(argv[4]));
     lightstage::io::write_pfm(argv[5], lightstage::report::relight(model, light));
   } catch (const std::exception& e) {

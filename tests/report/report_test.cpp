@@ -190,7 +190,7 @@ TEST(ViewerData, PayloadCarriesTheResultFiles) {
   const auto result = solved_result(dir);
   std::vector<std::string> notes;
   const nlohmann::json summary = nlohmann::json::parse(read_text(result / "summary.json"));
-  const auto model = report::load_surface_model(result, summary, 1 << 20, notes);
+  const auto model = report::load_surface_model(io::read_solve_folder(result), 1 << 20, notes);
   EXPECT_EQ(model.stride, 1);
   EXPECT_EQ(model.kind, report::ShadingKind::kLambertian);
   EXPECT_DOUBLE_EQ(model.display_scale, summary["albedo_png_scale"].get<double>());

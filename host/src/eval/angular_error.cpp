@@ -5,6 +5,8 @@
 #include "lightstage/host/io/mask.hpp"
 #include "lightstage/host/io/normal_map.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <system_error>
@@ -27,6 +29,14 @@ double percentile(const std::vector<double>& sorted, double q) {
 }
 
 }  // namespace
+
+std::string AngularErrorStats::describe() const {
+  std::string line =
+      fmt::format("angular error over {} pixels: mean {:.3f} deg, median {:.3f} deg, p90 {:.3f} deg, max {:.3f} deg",
+                  count, mean, median, p90, max);
+  if (missing > 0) line += fmt::format(" ({} pixels without a prediction)", missing);
+  return line;
+}
 
 nlohmann::json AngularErrorStats::to_json() const {
   return {{"mean_deg", mean}, {"median_deg", median}, {"p90_deg", p90},

@@ -5,11 +5,13 @@
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/normal_map.hpp"
 #include "lightstage/host/io/pfm.hpp"
+#include "lightstage/host/reflectance/bipolynomial_model.hpp"
 #include "util/atomic_file.hpp"
 #include "util/utc_time.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <system_error>
 #include <vector>
 
@@ -92,6 +94,99 @@ nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const Solve
   for (const auto& [key, value] : extra.items()) summary[key] = value;
   util::write_text_atomic(dir / "summary.json", summary.dump(2) + "\n");
   return summary;
+}
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// A float map of one channel and the normal map's size, or an error naming the file.
+cv::Mat read_float_plane(const fs::path& path, const cv::Size& size) {
+  cv::Mat plane = read_pfm(path);
+  if (plane.type() != CV_32FC1 || plane.size() != size)
+    fail("{}: expected one float channel of {}x{} (normal.png's size), got {} channel(s) of {}x{}", path.string(),
+         size.width, size.height, plane.channels(), plane.cols, plane.rows);
+  return plane;
+}
+
+nlohmann::json read_summary(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) fail("{}: cannot open", path.string());
+  nlohmann::json summary;
+  try {
+    in >> summary;
+  } catch (const std::exception& e) {
+    fail("{}: not valid JSON: {}", path.string(), e.what());
+  }
+  if (!summary.is_object()) fail("{}: expected a JSON object", path.string());
+  return summary;
+}
+
+// files.brdf of a bi-polynomial fit, merged into one CV_32FC(k) map.
+void read_reflectance(SolveFolder& folder) {
+  const auto& summary = folder.summary;
+  const auto reflectance = summary.find("reflectance");
+  if (reflectance == summary.end() || !reflectance->is_object()) return;
+  folder.reflectance = *reflectance;
+  const auto files = summary.find("files");
+  if (reflectance->value("model", "") != "bipolynomial" || files == summary.end() || !files->is_object() ||
+      !files->contains("brdf"))
+    return;
+  const fs::path summary_path = folder.dir / "summary.json";
+  const int order = reflectance->value("order", 0);
+  if (order < 1 || order > 3)
+    fail("{}: reflectance.order must be 1, 2 or 3 for a bi-polynomial, got {}", summary_path.string(), order);
+  const auto& names = (*files)["brdf"];
+  const int terms = bipolynomial_term_count(order);
+  if (!names.is_array() || static_cast<int>(names.size()) != terms)
+    fail("{}: files.brdf must list {} coefficient maps for order {}", summary_path.string(), terms, order);
+  std::vector<cv::Mat> planes;
+  for (const auto& name : names) {
+    if (!name.is_string()) fail("{}: files.brdf must list file names", summary_path.string());
+    planes.push_back(read_float_plane(folder.dir / name.get<std::string>(), folder.normals.size()));
+  }
+  cv::merge(planes, folder.coefficients);
+  folder.reflectance_order = order;
+}
+
+}  // namespace
+
+cv::Mat SolveFolder::display_albedo() const {
+  if (albedo.empty()) return {};
+  cv::Mat shown = albedo / albedo_png_scale;
+  cv::min(shown, 1.0, shown);
+  cv::max(shown, 0.0, shown);
+  return shown;
+}
+
+SolveFolder read_solve_folder(const fs::path& dir) {
+  if (!fs::is_directory(dir)) fail("{}: not a folder (expected a `solve` output folder)", dir.string());
+  SolveFolder folder;
+  folder.dir = dir;
+  const DecodedNormals normals = read_normal_map(dir / "normal.png");
+  folder.normals = normals.normals;
+  folder.solved = normals.valid;
+  const cv::Size size = folder.normals.size();
+  if (fs::exists(dir / "summary.json")) folder.summary = read_summary(dir / "summary.json");
+  const auto scale = folder.summary.find("albedo_png_scale");
+  if (scale != folder.summary.end() && scale->is_number() && std::isfinite(scale->get<double>()) &&
+      scale->get<double>() > 0)
+    folder.albedo_png_scale = scale->get<double>();
+  if (fs::exists(dir / "albedo.pfm")) {
+    folder.albedo = read_float_plane(dir / "albedo.pfm", size);
+  } else if (fs::exists(dir / "albedo.png")) {
+    const cv::Mat png = read_image(dir / "albedo.png");
+    if (png.channels() != 1 || png.size() != size)
+      fail("{}: expected a grey image of {}x{} (normal.png's size)", (dir / "albedo.png").string(), size.width,
+           size.height);
+    png.convertTo(folder.albedo, CV_32FC1,
+                  folder.albedo_png_scale / (png.depth() == CV_16U ? 65535.0 : 255.0));
+    folder.albedo_from_png = true;
+  }
+  if (fs::exists(dir / "residual.pfm")) folder.residual = read_float_plane(dir / "residual.pfm", size);
+  if (fs::exists(dir / "confidence.pfm")) folder.confidence = read_float_plane(dir / "confidence.pfm", size);
+  read_reflectance(folder);
+  return folder;
 }
 
 }  // namespace lightstage::io

@@ -1,61 +1,26 @@
 #include "lightstage/host/reflectance/relight.hpp"
 
 #include "lightstage/common/error.hpp"
-#include "lightstage/host/io/normal_map.hpp"
-#include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/reflectance/bipolynomial_model.hpp"
 
-#include <fstream>
 #include <vector>
 
 namespace lightstage {
 
+RelightModel relight_model(const io::SolveFolder& folder) {
+  RelightModel model;
+  model.normals = folder.normals;
+  model.solved = folder.solved;
+  model.albedo = folder.albedo.empty() ? cv::Mat(folder.normals.size(), CV_32FC1, cv::Scalar::all(1)) : folder.albedo;
+  model.coefficients = folder.coefficients;
+  model.order = folder.reflectance_order;
+  return model;
+}
+
 RelightModel load_relight_model(const std::filesystem::path& dir) {
   if (!std::filesystem::is_directory(dir))
     fail("--input {}: not a folder (expected a `solve` output folder)", dir.string());
-  RelightModel model;
-  const auto normals = io::read_normal_map(dir / "normal.png");
-  model.normals = normals.normals;
-  model.solved = normals.valid;
-  const auto albedo_path = dir / "albedo.pfm";
-  if (std::filesystem::exists(albedo_path)) {
-    model.albedo = io::read_pfm(albedo_path);
-    if (model.albedo.size() != model.normals.size() || model.albedo.channels() != 1)
-      fail("{}: albedo does not match normal.png ({}x{})", albedo_path.string(), model.normals.cols,
-           model.normals.rows);
-  } else {
-    model.albedo = cv::Mat(model.normals.size(), CV_32FC1, cv::Scalar::all(1));
-  }
-  const auto summary_path = dir / "summary.json";
-  if (!std::filesystem::exists(summary_path)) return model;
-  nlohmann::json summary;
-  try {
-    std::ifstream(summary_path) >> summary;
-  } catch (const std::exception& e) {
-    fail("{}: not valid JSON: {}", summary_path.string(), e.what());
-  }
-  if (!summary.contains("reflectance") || !summary["reflectance"].is_object()) return model;
-  const auto& reflectance = summary["reflectance"];
-  if (reflectance.value("model", "") != "bipolynomial" || !summary.contains("files") ||
-      !summary["files"].contains("brdf"))
-    return model;
-  const int order = reflectance.value("order", 0);
-  const int terms = bipolynomial_term_count(order);
-  const auto& files = summary["files"]["brdf"];
-  if (!files.is_array() || static_cast<int>(files.size()) != terms)
-    fail("{}: files.brdf must list {} coefficient maps for order {}", summary_path.string(), terms, order);
-  std::vector<cv::Mat> planes;
-  for (const auto& name : files) {
-    const auto path = dir / name.get<std::string>();
-    cv::Mat plane = io::read_pfm(path);
-    if (plane.size() != model.normals.size() || plane.type() != CV_32FC1)
-      fail("{}: coefficient map does not match normal.png ({}x{})", path.string(), model.normals.cols,
-           model.normals.rows);
-    planes.push_back(plane);
-  }
-  cv::merge(planes, model.coefficients);
-  model.order = order;
-  return model;
+  return relight_model(io::read_solve_folder(dir));
 }
 
 cv::Mat relight(const RelightModel& model, const Vec3& light_in, const Vec3& view) {

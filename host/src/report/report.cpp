@@ -104,12 +104,9 @@ class Page {
   std::string nav_, body_;
 };
 
-void load_inputs(Inputs& in, const ReportOptions& options) {
-  const fs::path summary_path = in.result_dir / "summary.json";
-  if (fs::exists(summary_path)) {
-    in.summary = read_json_file(summary_path);
-    if (!in.summary.is_object()) fail("{}: expected a JSON object", summary_path.string());
-  } else {
+void load_inputs(Inputs& in, const io::SolveFolder& folder, const ReportOptions& options) {
+  in.summary = folder.summary;
+  if (!fs::exists(in.result_dir / "summary.json")) {
     in.notes.push_back(
         "No summary.json in the result folder: the solver's settings and numbers are not shown.");
   }
@@ -533,31 +530,20 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
   if (!fs::is_directory(result_dir)) fail("{}: not a folder (expected a solve result)", result_dir.string());
   if (!fs::exists(result_dir / "normal.png"))
     fail("{}: no normal.png: not a solve result folder", (result_dir / "normal.png").string());
+  const io::SolveFolder folder = io::read_solve_folder(result_dir);
   Inputs in;
   in.result_dir = result_dir;
-  load_inputs(in, options);
+  load_inputs(in, folder, options);
 
-  const io::DecodedNormals normals = io::read_normal_map(result_dir / "normal.png");
+  const io::DecodedNormals normals{folder.normals, folder.solved};
   Page page;
 
   // The viewer first: it is what people come for.
-  const SurfaceModel model = load_surface_model(result_dir, in.summary, options.viewer_max_pixels, in.notes);
+  const SurfaceModel model = load_surface_model(folder, options.viewer_max_pixels, in.notes);
   page.section("viewer", "Relighting viewer", viewer_section(model, in));
 
-  cv::Mat albedo_full;
-  if (fs::exists(result_dir / "albedo.pfm")) {
-    albedo_full = io::read_pfm(result_dir / "albedo.pfm");
-  }
-  if (albedo_full.type() != CV_32FC1 || albedo_full.size() != normals.normals.size()) {
-    albedo_full = cv::Mat(normals.normals.size(), CV_32FC1, cv::Scalar(0));
-    // model.albedo is the full map when stride is 1; else fall back to albedo.png.
-    if (model.stride == 1)
-      albedo_full = model.albedo;
-    else if (fs::exists(result_dir / "albedo.png")) {
-      const cv::Mat png = io::read_image(result_dir / "albedo.png");
-      png.convertTo(albedo_full, CV_32FC1, model.display_scale / (png.depth() == CV_16U ? 65535.0 : 255.0));
-    }
-  }
+  const cv::Mat albedo_full =
+      folder.albedo.empty() ? cv::Mat(normals.normals.size(), CV_32FC1, cv::Scalar(0)) : folder.albedo;
   page.section("surface", "Normals and albedo", surface_section(in, normals, albedo_full));
 
   // Depth: --depth (a depth.pfm, or a `lightstage integrate` folder), else RESULT_DIR/depth.pfm.

@@ -32,18 +32,18 @@ cv::Mat subsample(const cv::Mat& image, int stride) {
 
 }  // namespace
 
-SurfaceModel load_surface_model(const std::filesystem::path& result_dir, const nlohmann::json& summary,
-                                int max_pixels, std::vector<std::string>& notes) {
+SurfaceModel load_surface_model(const io::SolveFolder& folder, int max_pixels, std::vector<std::string>& notes) {
   if (max_pixels < 1) fail("report: viewer pixel budget must be ≥ 1, got {}", max_pixels);
-  // The files `lightstage relight` reads, read the same way, so that the two agree.
-  const RelightModel relight_model = load_relight_model(result_dir);
+  const RelightModel relight_model = lightstage::relight_model(folder);
+  const nlohmann::json& summary = folder.summary;
   SurfaceModel model;
   model.source_size = relight_model.normals.size();
-  model.display_scale = summary.value("albedo_png_scale", 1.0);
-  if (!(model.display_scale > 0) || !std::isfinite(model.display_scale)) model.display_scale = 1.0;
-  if (!std::filesystem::exists(result_dir / "albedo.pfm"))
+  model.display_scale = folder.albedo_png_scale;
+  if (folder.albedo.empty())
     notes.push_back(
-        "No albedo.pfm in the result folder: the viewer (like `lightstage relight`) uses albedo 1.");
+        "No albedo.pfm or albedo.png in the result folder: the viewer (like `lightstage relight`) uses albedo 1.");
+  else if (folder.albedo_from_png)
+    notes.push_back("No albedo.pfm in the result folder: the viewer uses albedo.png (16-bit, clipped at its scale).");
   if (relight_model.order > 0) {
     model.kind = ShadingKind::kBiPolynomial;
     model.order = relight_model.order;

@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 
 #include <cstddef>
+#include <string>
 #include <filesystem>
 
 namespace lightstage {
@@ -20,6 +21,8 @@ struct AngularErrorStats {
   std::size_t missing = 0;  // pixels in the mask with ground truth but no prediction
 
   nlohmann::json to_json() const;
+  // One line for people: "angular error over N pixels: mean ... deg, ...".
+  std::string describe() const;
 };
 
 struct AngularErrorMap {

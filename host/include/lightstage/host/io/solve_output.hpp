@@ -1,5 +1,6 @@
 #pragma once
-// A solver's results on disk, in one output folder:
+// A solver's results on disk, in one output folder (a "solve folder"), written
+// and read back only here:
 //   normal.png      16-bit normal map (project encoding, zero where not solved)
 //   normal_vis.png  8-bit picture of the normals
 //   albedo.png      16-bit grey, value = round(min(albedo / scale, 1) · 65535), where
@@ -7,10 +8,15 @@
 //   albedo.pfm      float albedo (0 where not solved)
 //   residual.pfm    float RMS residual of the fit (0 where not solved)
 //   summary.json    method, parameters, summary fields, time, input, software version
+//   confidence.pfm  when the method gives one: float confidence in [0, 1]
+//   brdf_*.pfm      when the method fits a per-pixel reflectance: one float map per
+//                   coefficient, listed in summary.json files.brdf, described by "reflectance"
 
 #include "lightstage/host/solvers/solve_result.hpp"
 
 #include <nlohmann/json.hpp>
+
+#include <opencv2/core.hpp>
 
 #include <filesystem>
 
@@ -26,5 +32,37 @@ nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const Solve
 // The albedo scale used for albedo.png: the 99.5th percentile of the albedo
 // over solved pixels, or 1 when there are none (or it is not positive).
 double albedo_png_scale(const SolveResult& result);
+
+// A solve folder read back. Every reader of solve results (report, integrate,
+// relight, reflectance, the demo) goes through this, so the files are decoded
+// one way everywhere.
+struct SolveFolder {
+  std::filesystem::path dir;
+  nlohmann::json summary = nlohmann::json::object();  // summary.json ({} when there is none)
+  cv::Mat normals;                                     // CV_32FC3, zero where not solved
+  cv::Mat solved;                                      // CV_8UC1, 255 where normal.png holds a normal
+  // CV_32FC1, the solver's albedo: albedo.pfm, else albedo.png times the
+  // albedo_png_scale of summary.json; empty when the folder has neither.
+  cv::Mat albedo;
+  bool albedo_from_png = false;  // albedo came from the 16-bit PNG (quantised, clipped at the scale)
+  double albedo_png_scale = 1;   // summary.json's, 1 when absent or not positive
+  cv::Mat residual;              // CV_32FC1 or empty
+  cv::Mat confidence;            // CV_32FC1 or empty
+  // The per-pixel reflectance model: CV_32FC(k) from files.brdf, with order > 0 for a
+  // bi-polynomial; empty (order 0) when the method fitted none.
+  cv::Mat coefficients;
+  int reflectance_order = 0;
+  nlohmann::json reflectance = nullptr;  // summary.json "reflectance"
+
+  // albedo / albedo_png_scale clipped to [0, 1]: what albedo.png shows (for
+  // mesh colours and pictures). Empty when there is no albedo.
+  cv::Mat display_albedo() const;
+  std::string method() const { return summary.value("method", std::string()); }
+};
+
+// Reads `dir` (normal.png required; the rest when present). Throws InputError
+// naming the file when one does not decode or does not match normal.png's size,
+// or when summary.json is not a JSON object.
+SolveFolder read_solve_folder(const std::filesystem::path& dir);
 
 }  // namespace lightstage::io

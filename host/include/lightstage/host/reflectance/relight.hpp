@@ -6,6 +6,7 @@
 // in the stack's units (linear, at unit light intensity).
 
 #include "lightstage/common/geometry.hpp"
+#include "lightstage/host/io/solve_output.hpp"
 
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
@@ -22,8 +23,10 @@ struct RelightModel {
   int order = 0;         // bi-polynomial order, 0 = Lambertian albedo
 };
 
-// Reads normal.png, albedo.pfm and (when summary.json lists them) the
-// brdf_*.pfm coefficient maps from a `solve` output folder. Errors name the file.
+// The model of a solve folder (io/solve_output.hpp): its normals, albedo (1
+// where the folder has none) and bi-polynomial coefficient maps.
+RelightModel relight_model(const io::SolveFolder& folder);
+// The same, read from a `solve` output folder. Errors name the file.
 RelightModel load_relight_model(const std::filesystem::path& result_dir);
 
 // CV_32FC1 image under one distant light `light` (object -> light, normalised here).

@@ -14,6 +14,7 @@
 // The page shows value / display_scale as a linear grey (0 → black, ≥ 1 → white).
 
 #include "lightstage/common/geometry.hpp"
+#include "lightstage/host/io/solve_output.hpp"
 
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
@@ -38,12 +39,12 @@ struct SurfaceModel {
   cv::Size source_size;        // the result's size before striding
 };
 
-// Reads normal.png, albedo.pfm and, when summary.json says a bi-polynomial
-// model was fitted, its coefficient maps (load_relight_model). Results larger than `max_pixels` are
-// subsampled with an integer stride (recorded in the model). Notes on what was used or left out are appended
-// to `notes`. Throws InputError naming the file that is missing or wrong.
-SurfaceModel load_surface_model(const std::filesystem::path& result_dir, const nlohmann::json& summary,
-                                int max_pixels, std::vector<std::string>& notes);
+// The viewer's model of a solve folder (io/solve_output.hpp): its normals,
+// albedo and, when a bi-polynomial model was fitted, its coefficient maps — the
+// model `lightstage relight` renders (relight_model), so the two agree. Results
+// larger than `max_pixels` are subsampled with an integer stride (recorded in the
+// model). Notes on what was used or left out are appended to `notes`.
+SurfaceModel load_surface_model(const io::SolveFolder& folder, int max_pixels, std::vector<std::string>& notes);
 
 // The value of pixel (x, y) under `light` (normalised here); 0 where not valid.
 double shade(const SurfaceModel& model, int x, int y, const Vec3& light);

@@ -37,8 +37,8 @@ struct BiPolynomialOptions;
 inline constexpr double kMinFalloff = -0.5;
 inline constexpr double kMaxFalloff = 5.0;
 // Fewer kept observations cannot tell t from t² (the free fit has four
-// unknowns): such pixels neither vote for κ nor get the fall-off start (12
-// lights with 6 kept moved the start by 11° median for κ = −0.5).
+// unknowns): such pixels neither vote for κ nor get the fall-off start (on 12
+// lights with 6 kept it moved the start far: docs/solvers.md).
 inline constexpr std::size_t kMinFalloffObservations = 10;
 // Fewer voting pixels than this leave κ at 0 (the Lambertian start).
 inline constexpr std::size_t kMinFalloffPixels = 50;

@@ -16,9 +16,7 @@
 //     observations near the terminator go behind the hypothesised surface (or
 //     their y' explodes) and δ rises steeply; above it, the diffuse part of the
 //     profile stays nearly monotonic and δ barely grows — with noise it even
-//     falls on average. So the argmin drifts up that plateau (λ = 0.05 on a
-//     Lambertian surface: +1.3° on the sweep's sphere with the robust
-//     azimuth, +2.4° on the unit test's grid with the true one), and from it θ
+//     falls on average. So the argmin drifts up that plateau, and from it θ
 //     descends while δ stays within (1 + plateau_tolerance) × δ_min, the noise
 //     level of the best hypothesis (docs/solvers.md has the measurements).
 // Outputs: normal, albedo = median of i_j / (n·l_j) over lit observations,
@@ -45,17 +43,13 @@ struct MonotonicOptions {
   double fine_step_deg = 0.1;      // second pass within ± coarse_step of the best
   // Step 3: descend from the argmin while δ ≤ (1 + this) × δ_min (1: twice
   // the best cost, which noise alone reaches); 0 = the argmin, as published.
-  // On the material sweep (100 lights, 21 materials), mean error with no
-  // noise / λ = 0.05 / 0.15 / 0.3: argmin 1.66 / 3.67 / 5.68 / 7.28°;
-  // 0.5: 1.20 / 1.37 / 2.14 / 3.85°; 1: 1.09 / 1.27 / 1.72 / 3.20°;
-  // 2: 1.00 / 1.28 / 1.60 / 2.96°. Larger values overshoot below the true
-  // elevation on a Lambertian surface (λ = 0.05, true azimuth: 1 → −0.6°, 2 → −0.8°).
+  // Larger values help the material sweep but overshoot below the true
+  // elevation on a Lambertian surface (docs/solvers.md has the sweep).
   double plateau_tolerance = 1.0;
   // > 0: refine θ and φ together around the 1-D answer (pattern search, steps
   // from this size down to fine_step_deg; then step 3 again). Beyond the
   // dissertation: it corrects an azimuth a few degrees off, but it is worse on
-  // the sweep except at λ = 0.3 (1.15 / 1.39 / 1.95 / 2.59° against
-  // 1.09 / 1.27 / 1.72 / 3.20° without), so off by default.
+  // the sweep except at the strongest noise (docs/solvers.md), so off by default.
   double refine_step_deg = 0;
   int min_observations = 6;  // fewer lit observations: rejected
   // Isotropy azimuth: rings at these quantiles of the lights' angles from the

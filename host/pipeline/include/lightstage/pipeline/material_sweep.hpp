@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-namespace lightstage::cli {
+namespace lightstage::pipeline {
 
 struct MaterialSweepOptions {
   std::vector<std::string> materials;  // sim material presets; empty = default_sweep_materials()
@@ -27,9 +27,7 @@ struct MaterialSweepOptions {
   double light_cone_deg = 90;  // lights within this angle of the view axis (90: the hemisphere)
   std::vector<double> noise = {-1, 0, 0.05, 0.15, 0.3};  // λ; −1 = no noise, no quantisation
   double t_low = 0.25;                                   // bi-polynomial, auto and lambert-low
-  // monotonic's --azimuth-from: a robust Lambertian normal's azimuth. Sweep means, no noise / λ = 0.15:
-  // robust 1.09 / 1.72°, biquadratic 1.12 / 1.84°, isotropy 1.70 / 2.65° (its ring interpolation of
-  // 100 random lights is ~2° off even on Lambert).
+  // monotonic's --azimuth-from: a robust Lambertian normal's azimuth (docs/solvers.md compares the choices).
   std::string azimuth_from = "robust";
   double refine_step_deg = MonotonicOptions{}.refine_step_deg;      // monotonic's 2-D refinement (0 = off)
   double plateau_tolerance = MonotonicOptions{}.plateau_tolerance;  // monotonic's step 3 (0 = argmin)
@@ -72,4 +70,4 @@ MaterialSweepResult run_material_sweep(const MaterialSweepOptions& options,
 void write_material_plot(const std::filesystem::path& path, const MaterialSweepResult& result,
                          std::size_t light_index, std::size_t noise_index);
 
-}  // namespace lightstage::cli
+}  // namespace lightstage::pipeline

@@ -1,13 +1,13 @@
-#include "material_sweep.hpp"
+#include "lightstage/pipeline/material_sweep.hpp"
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/geometry.hpp"
 #include "lightstage/host/eval/angular_error.hpp"
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/radiometry.hpp"
+#include "lightstage/pipeline/solve_methods.hpp"
+#include "lightstage/pipeline/synthetic_observations.hpp"
 #include "lightstage/sim/material.hpp"
-#include "methods.hpp"
-#include "options.hpp"
 
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
@@ -16,88 +16,17 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
-#include <random>
 
-namespace lightstage::cli {
+namespace lightstage::pipeline {
 namespace {
-
-constexpr int kAzimuths = 36;
-constexpr int kElevations = 45;
 
 std::string noise_label(double lambda) {
   return lambda < 0 ? std::string("no noise") : fmt::format("lambda={:g}", lambda);
 }
 
-// Uniform directions on the upper hemisphere (z > 0.05: a light at the horizon lights nothing),
-// or within `cone_deg` of the view axis when that is below 90.
-Eigen::MatrixX3d random_lights(int count, double cone_deg, std::uint64_t seed) {
-  const double min_z = std::max(std::cos(rad_from_deg(cone_deg)), 0.05);
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> gauss;
-  Eigen::MatrixX3d lights(count, 3);
-  for (int j = 0; j < count;) {
-    Vec3 v(gauss(rng), gauss(rng), gauss(rng));
-    if (v.norm() < 1e-9) continue;
-    v.normalize();
-    v.z() = std::abs(v.z());
-    if (v.z() < min_z) continue;
-    lights.row(j++) = v.transpose();
-  }
-  return lights;
-}
-
-struct SweepScene {
-  Observations observations;
-  cv::Mat truth;  // CV_32FC3
-};
-
-SweepScene render(const sim::Material& material, const Eigen::MatrixX3d& lights, double lambda,
-                  std::uint64_t seed) {
-  SweepScene scene;
-  Observations& obs = scene.observations;
-  obs.size = cv::Size(kAzimuths, kElevations);
-  obs.mask = cv::Mat(obs.size, CV_8UC1, cv::Scalar::all(255));
-  obs.lights = lights;
-  const auto images = lights.rows();
-  const int pixels = kAzimuths * kElevations;
-  obs.intensities.resize(pixels, images);
-  obs.saturated = FlagMatrix::Constant(pixels, images, false);
-  scene.truth = cv::Mat(obs.size, CV_32FC3);
-  Eigen::MatrixXd exact(pixels, images);
-  const Vec3 v = Vec3::UnitZ();
-  for (int y = 0; y < kElevations; ++y) {
-    for (int x = 0; x < kAzimuths; ++x) {
-      const int p = y * kAzimuths + x;
-      obs.pixels.emplace_back(x, y);
-      const Vec3 n =
-          direction_from_elevation_azimuth(rad_from_deg(2.0 * (y + 1)), rad_from_deg(10.0 * (x + 1)));
-      scene.truth.at<cv::Vec3f>(y, x) =
-          cv::Vec3f(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
-      for (Eigen::Index j = 0; j < images; ++j)
-        exact(p, j) = material.shading(0, 0, n, lights.row(j).transpose(), v);
-    }
-  }
-  const double peak = exact.maxCoeff();
-  if (peak > 0) exact /= peak;
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> gauss;
-  for (int p = 0; p < pixels; ++p) {
-    for (Eigen::Index j = 0; j < images; ++j) {
-      double value = exact(p, j);
-      if (lambda >= 0) {
-        value += lambda * value * gauss(rng);
-        if (value >= 1.0) obs.saturated(p, j) = true;
-        value = std::round(std::clamp(value, 0.0, 1.0) * 65535.0) / 65535.0;
-      }
-      obs.intensities(p, j) = static_cast<float>(value);
-    }
-  }
-  return scene;
-}
-
 SolveResult run_method(const std::string& name, const Observations& obs,
                        const MaterialSweepOptions& options) {
-  SolveArgs args;
+  SolveSettings args;
   args.t_low = options.t_low;
   args.azimuth_from = options.azimuth_from;
   args.automatic.agreement_deg = options.auto_agreement_deg;
@@ -188,11 +117,15 @@ MaterialSweepResult run_material_sweep(const MaterialSweepOptions& given,
                                                      materials.size(), std::vector<double>(methods, 0.0))));
   for (std::size_t li = 0; li < options.light_counts.size(); ++li) {
     const Eigen::MatrixX3d lights =
-        random_lights(options.light_counts[li], options.light_cone_deg, options.seed);
+        random_hemisphere_lights(options.light_counts[li],
+                                 std::max(std::cos(rad_from_deg(options.light_cone_deg)), 0.05), options.seed);
     for (std::size_t ni = 0; ni < options.noise.size(); ++ni) {
       for (std::size_t mi = 0; mi < materials.size(); ++mi) {
-        const SweepScene scene =
-            render(materials[mi], lights, options.noise[ni], options.seed * 1000003 + mi * 101 + ni);
+        SyntheticOptions render;
+        render.noise = options.noise[ni];
+        render.seed = options.seed * 1000003 + mi * 101 + ni;
+        const SyntheticScene scene =
+            render_synthetic(materials[mi], sweep_grid_size(), sweep_grid_normal, lights, render);
         for (std::size_t k = 0; k < methods; ++k) {
           const auto start = std::chrono::steady_clock::now();
           const SolveResult solved = run_method(options.methods[k], scene.observations, options);
@@ -351,4 +284,4 @@ void write_material_plot(const std::filesystem::path& path, const MaterialSweepR
   io::write_png(path, image);
 }
 
-}  // namespace lightstage::cli
+}  // namespace lightstage::pipeline

@@ -1,4 +1,4 @@
-#include "dome_demo.hpp"
+#include "lightstage/pipeline/dome_demo.hpp"
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
@@ -10,9 +10,11 @@
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/normal_map.hpp"
 #include "lightstage/host/io/pfm.hpp"
+#include "lightstage/host/io/solve_output.hpp"
 #include "lightstage/host/report/report.hpp"
 #include "lightstage/host/surface/integration.hpp"
 #include "lightstage/host/surface/surface_output.hpp"
+#include "lightstage/pipeline/solve_folder.hpp"
 #include "lightstage/sim/camera/sim_camera.hpp"
 #include "lightstage/sim/simulate.hpp"
 
@@ -25,7 +27,7 @@
 
 #include <unistd.h>
 
-namespace lightstage::cli {
+namespace lightstage::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
@@ -86,11 +88,17 @@ class DomeDemo {
 
   nlohmann::json run() {
     const auto start = Clock::now();
+    // No clamp at 1: values are normalised to the rig's nominal exposure, and
+    // an LED exposed shorter than that legitimately reads above 1. The
+    // settings are checked before any program starts.
+    solve_ = o_.solve;
+    solve_.no_clamp = true;
+    solve_.resolve();
     // A demo starts afresh: what an earlier run wrote here goes (only what the demo writes).
     for (const char* written : {"scenes", "calibration", "capture", "result", "surface", "dome", "demo.json"})
       fs::remove_all(o_.out / written);
     fs::create_directories(o_.out);
-    summary_ = {{"rig", o_.rig.string()}, {"scene", o_.scene}, {"method", o_.method_name}};
+    summary_ = {{"rig", o_.rig.string()}, {"scene", o_.scene}, {"method", o_.solve.method}};
 
     // 1. The chrome sphere at each position: the light calibration's input.
     std::vector<fs::path> chrome_stacks;
@@ -246,36 +254,27 @@ class DomeDemo {
     SolveCalibration calibration;
     calibration.file = calibration_file;
     const auto start = Clock::now();
-    // No clamp at 1: values are normalised to the rig's nominal exposure, and
-    // an LED exposed shorter than that legitimately reads above 1.
-    RadiometryOptions radiometry;
-    radiometry.clamp_to_one = false;
-    const SolveReport solved = solve_folder(stack, radiometry, o_.solver, result, calibration);
+    const SolveReport solved = solve_folder(stack, solve_, result, calibration);
     summary_["solve"] = {{"folder", result.string()}, {"seconds", seconds_since(start)}};
     if (solved.error) summary_["solve"]["error_vs_ground_truth"] = solved.error->to_json();
-    say(fmt::format("solved with {} and the calibrated near lights in {:.1f} s -> {}", o_.method_name,
+    say(fmt::format("solved with {} and the calibrated near lights in {:.1f} s -> {}", o_.solve.method,
                     seconds_since(start), result.string()));
-    if (solved.error && o_.mode == OutputMode::kHuman) print_error_stats(*solved.error);
+    if (solved.error) say(solved.error->describe());
   }
 
   void integrate(const fs::path& result, const fs::path& out) {
-    const io::DecodedNormals normals = io::read_normal_map(result / "normal.png");
+    const io::SolveFolder solved = io::read_solve_folder(result);
     const surface::CameraModel camera = surface::CameraModel::orthographic(
-        normals.normals.size(), rig_.camera.pixel_pitch_mm * static_cast<double>(rig_.camera.width) /
-                                    static_cast<double>(normals.normals.cols));
+        solved.normals.size(), rig_.camera.pixel_pitch_mm * static_cast<double>(rig_.camera.width) /
+                                   static_cast<double>(solved.normals.cols));
     surface::IntegrationOptions integration;
     const surface::SurfaceResult surface =
-        surface::integrate_normals(normals.normals, normals.valid, camera, integration);
-    cv::Mat albedo;
-    if (fs::exists(result / "albedo.png")) {
-      const cv::Mat image = io::read_image(result / "albedo.png");
-      if (image.channels() == 1)
-        image.convertTo(albedo, CV_32FC1, image.depth() == CV_16U ? 1.0 / 65535 : 1.0 / 255);
-    }
+        surface::integrate_normals(solved.normals, solved.solved, camera, integration);
+    const cv::Mat albedo = solved.display_albedo();
     surface::SurfaceFiles files;
     files.ply = true;
     const nlohmann::json written =
-        surface::write_surface_outputs(out, surface, camera, normals.normals, albedo, files, {});
+        surface::write_surface_outputs(out, surface, camera, solved.normals, albedo, files, {});
     summary_["surface"] = {
         {"folder", out.string()}, {"pixels", surface.stats.pixels}, {"seconds", surface.stats.seconds}};
     say(fmt::format("integrated a surface over {} pixels in {:.1f} s -> {}", surface.stats.pixels,
@@ -294,6 +293,7 @@ class DomeDemo {
   }
 
   const DomeDemoOptions& o_;
+  SolveSettings solve_;
   Rig rig_;
   SocketFolder sockets_;
   nlohmann::json summary_;
@@ -301,6 +301,12 @@ class DomeDemo {
 
 }  // namespace
 
+SolveSettings default_demo_solve() {
+  SolveSettings settings;
+  settings.shadow_threshold = 0.02;
+  return settings;
+}
+
 nlohmann::json run_dome_demo(const DomeDemoOptions& options) { return DomeDemo(options).run(); }
 
-}  // namespace lightstage::cli
+}  // namespace lightstage::pipeline

@@ -8,7 +8,7 @@
 
 #include "lightstage/host/capture/capture_session.hpp"
 #include "lightstage/host/progress.hpp"
-#include "steps.hpp"
+#include "lightstage/pipeline/solve_settings.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -18,7 +18,11 @@
 #include <string>
 #include <vector>
 
-namespace lightstage::cli {
+namespace lightstage::pipeline {
+
+// Lambertian least squares without the observations at or below 0.02: a
+// capture has shadows.
+SolveSettings default_demo_solve();
 
 struct DomeDemoOptions {
   std::filesystem::path rig;
@@ -35,8 +39,7 @@ struct DomeDemoOptions {
   double sphere_radius_mm = 25;
   std::vector<double> sphere_x_mm = {-25, 25};
   CaptureOptions capture;  // exposure, darks, loop; `out` and `mode` are set per stage
-  SolverFunction solver;   // default: Lambertian least squares with a shadow threshold
-  std::string method_name = "l2";
+  SolveSettings solve = default_demo_solve();  // any method of the registry (solve_methods.hpp)
   OutputMode mode = OutputMode::kHuman;
 };
 
@@ -44,4 +47,4 @@ struct DomeDemoOptions {
 // stage throws). Returns the summary also written to OUT/demo.json.
 nlohmann::json run_dome_demo(const DomeDemoOptions& options);
 
-}  // namespace lightstage::cli
+}  // namespace lightstage::pipeline

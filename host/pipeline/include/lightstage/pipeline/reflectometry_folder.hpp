@@ -1,0 +1,31 @@
+#pragma once
+// Reflectometry of a stack whose normals are known (dissertation 3.5): one
+// BRDF for the whole object — Lambert, bilinear, biquadratic, bicubic and
+// Cook–Torrance — each fitted to the stack's observations.
+
+#include "lightstage/host/reflectance/reflectometry.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <vector>
+
+namespace lightstage::pipeline {
+
+struct ReflectometrySettings {
+  std::filesystem::path input;    // a stack folder
+  std::filesystem::path normals;  // a normal map; empty = the stack's Normal_gt.png
+  SampleOptions samples;
+  bool clamp_to_one = true;
+};
+
+struct ReflectometryReport {
+  std::size_t samples = 0;
+  std::vector<ReflectanceFit> fits;
+  nlohmann::json json;  // what reflectance.json holds
+};
+
+// Throws InputError naming --normals when the stack has no ground truth and none is given.
+ReflectometryReport fit_stack_reflectance(const ReflectometrySettings& settings);
+
+}  // namespace lightstage::pipeline

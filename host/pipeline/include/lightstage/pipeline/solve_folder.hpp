@@ -1,0 +1,61 @@
+#pragma once
+// Solving a stack folder into a solve folder: load the stack, apply a light
+// calibration, build the observations, run a solver, measure the error when the
+// stack holds ground truth, write the outputs (io/solve_output.hpp) and the report.
+
+#include "lightstage/common/image_stack.hpp"
+#include "lightstage/host/eval/angular_error.hpp"
+#include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/solvers/solve_result.hpp"
+#include "lightstage/pipeline/solve_settings.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+
+namespace lightstage::pipeline {
+
+struct SolveReport {
+  nlohmann::json summary;                  // as written to summary.json
+  std::optional<AngularErrorStats> error;  // when the stack holds ground truth
+};
+
+// A light calibration to apply before solving (docs/calibration.md): its
+// directions and intensities replace the stack's; its LED positions give
+// near lights unless `distant` is set.
+struct SolveCalibration {
+  std::filesystem::path file;  // calibration.json or .lp; empty = none
+  bool distant = false;
+};
+
+// A stack folder made ready to solve: its observations (with the calibration
+// applied and, when it holds LED positions, near lights), the ground truth and
+// what the calibration changed.
+struct SolveInput {
+  Observations observations;
+  std::optional<GroundTruth> ground_truth;
+  nlohmann::json calibration = nullptr;  // describe() of the applied calibration, with near_lights
+};
+SolveInput load_solve_input(const std::filesystem::path& input, const RadiometryOptions& radiometry,
+                            const SolveCalibration& calibration = {});
+
+using SolverFunction = std::function<SolveResult(const Observations&)>;
+
+// Loads the stack in `input`, solves it with `solver` and writes the results
+// and report.html into `out`.
+SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOptions& radiometry,
+                         const SolverFunction& solver, const std::filesystem::path& out,
+                         const SolveCalibration& calibration = {});
+
+// The same with a method of the registry (settings resolved: SolveSettings::resolve).
+SolveReport solve_folder(const std::filesystem::path& input, const SolveSettings& settings,
+                         const std::filesystem::path& out, const SolveCalibration& calibration = {});
+
+// Writes RESULT_DIR/report.html (report/report.hpp) for a solve of the stack
+// in `input`; a failure is logged as a warning, not thrown: a result without
+// a report is still a result.
+void write_result_report(const std::filesystem::path& result_dir, const std::filesystem::path& input);
+
+}  // namespace lightstage::pipeline

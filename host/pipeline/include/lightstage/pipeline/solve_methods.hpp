@@ -1,0 +1,48 @@
+#pragma once
+// The photometric-stereo methods by name: a registry from a name to a solve
+// function over the observations and the settings (solve_settings.hpp), with
+// one help line each. `solve --method`, the demo, the material sweep and the
+// Python module all look methods up here, so a new method is one entry (and
+// its options in SolveSettings) and no caller changes.
+
+#include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/solvers/solve_result.hpp"
+#include "lightstage/pipeline/solve_settings.hpp"
+
+#include <cstddef>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace lightstage::pipeline {
+
+using SolveFunction = std::function<SolveResult(const Observations& observations, const SolveSettings& settings)>;
+
+struct SolveMethod {
+  std::string name;
+  std::string help;  // one line, for --help
+  SolveFunction solve;
+};
+
+// Every method, in the order --help lists them: the built-in ones, then any registered.
+const std::vector<SolveMethod>& solve_methods();
+std::vector<std::string> solve_method_names();
+// Throws InputError naming --method and the known names.
+const SolveMethod& find_solve_method(const std::string& name);
+// Adds a method (at start-up, before any solve: the registry is not locked).
+// Throws InputError when the name is taken or empty.
+void register_solve_method(SolveMethod method);
+
+// Solves with settings.method (settings resolved: SolveSettings::resolve).
+SolveResult solve_with(const Observations& observations, const SolveSettings& settings);
+
+// What a solve's progress counts: pixels for the per-pixel methods (twice
+// over for monotonic with another method's azimuth, which solves every pixel
+// first), cost evaluations for shape-prior's refinement.
+struct SolveWork {
+  std::string unit = "px";
+  std::size_t total = 0;
+};
+SolveWork solve_work(const SolveSettings& settings, const Observations& observations);
+
+}  // namespace lightstage::pipeline

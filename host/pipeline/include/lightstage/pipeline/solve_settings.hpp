@@ -1,0 +1,63 @@
+#pragma once
+// Everything `solve --method NAME` can be told, for every method at once: each
+// solver's Options struct plus the few settings that several methods share.
+// The CLI binds its flags to these fields; library callers (the demo, the
+// material sweep, Python) fill them directly. resolve() turns the shared
+// settings into each method's options and checks the chosen method's.
+
+#include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/solvers/auto.hpp"
+#include "lightstage/host/solvers/bipolynomial.hpp"
+#include "lightstage/host/solvers/lambertian.hpp"
+#include "lightstage/host/solvers/monotonic.hpp"
+#include "lightstage/host/solvers/robust.hpp"
+#include "lightstage/host/solvers/shape_prior.hpp"
+
+#include <optional>
+#include <string>
+
+namespace lightstage::pipeline {
+
+// `--method shape-prior`: the depth prior, the camera that relates it to the
+// images, and the solver's options (shape_prior_method.hpp).
+struct ShapePriorSettings {
+  ShapePriorOptions options;
+  std::string prior;        // depth PNG, PFM, EXR or PLY
+  std::string intrinsics;   // K.txt of a perspective camera; empty = orthographic
+  double pixel_mm = 1.0;    // orthographic pixel size in the prior's unit
+  double prior_radius = 0;  // plane-PCA radius; 0 = three pixel footprints
+  double png_scale = 1.0;   // depth unit per DN of a 16-bit PNG prior
+};
+
+struct SolveSettings {
+  std::string method = "l2";  // a name of the registry (solve_methods.hpp)
+  L2Options l2;
+  RobustOptions robust;
+  MonotonicOptions monotonic;
+  BiPolynomialOptions bipolynomial;
+  AutoOptions automatic;
+  ShapePriorSettings shape_prior;
+  std::string estimator = "irls-l1";  // robust: irls-l1, ransac or none
+  // monotonic: the azimuth from isotropy or another method's normals (robust:
+  // better on the material sweep and the DiLiGenT ball than isotropy).
+  std::string azimuth_from = "robust";
+  // Settings several methods share: when set, resolve() copies them into each method's options.
+  std::optional<double> shadow_threshold, t_low;
+  std::optional<int> min_observations, threads, max_iterations;
+  std::string falloff = "auto";  // bi-polynomial and auto: "auto" or kappa (incidence_falloff.hpp)
+  RadiometryOptions radiometry;
+  bool no_clamp = false;
+
+  // Copies the shared settings into the methods' options and checks the
+  // chosen method's (a bad value fails before any input is read, naming its
+  // flag). Throws InputError.
+  void resolve();
+  // Gives every method's options the same progress report (solve_result.hpp).
+  void set_progress(const SolveProgress& progress);
+};
+
+// The bi-polynomial start's fall-off: "auto" (estimated from the object, nullopt)
+// or a number in [kMinFalloff, kMaxFalloff]; throws InputError naming --falloff.
+std::optional<double> parse_falloff(const std::string& text);
+
+}  // namespace lightstage::pipeline

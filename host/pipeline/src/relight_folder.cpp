@@ -1,0 +1,55 @@
+#include "lightstage/pipeline/relight_folder.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/host/io/image_io.hpp"
+#include "lightstage/host/reflectance/relight.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <fstream>
+
+namespace lightstage::pipeline {
+
+nlohmann::json relight_folder(const RelightSettings& settings) {
+  if (settings.lights.empty()) fail("relight: give at least one --light x,y,z or --turntable N");
+  const RelightModel model = load_relight_model(settings.input);
+  std::vector<cv::Mat> frames;
+  std::vector<float> all;
+  for (const auto& l : settings.lights) {
+    frames.push_back(relight(model, l));
+    for (int y = 0; y < frames.back().rows; ++y)
+      for (int x = 0; x < frames.back().cols; ++x)
+        if (model.solved.at<std::uint8_t>(y, x) != 0) all.push_back(frames.back().at<float>(y, x));
+  }
+  double scale = settings.scale;
+  if (!(scale > 0)) {
+    scale = 1;
+    if (!all.empty()) {
+      const auto at = all.begin() + static_cast<std::ptrdiff_t>(0.995 * static_cast<double>(all.size() - 1));
+      std::nth_element(all.begin(), at, all.end());
+      if (*at > 0) scale = *at;
+    }
+  }
+  std::filesystem::create_directories(settings.out);
+  nlohmann::json summary = {{"input", settings.input.string()},
+                            {"scale", scale},
+                            {"model", model.order > 0 ? "bipolynomial" : "lambert"},
+                            {"order", model.order},
+                            {"frames", nlohmann::json::array()}};
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    cv::Mat scaled = frames[i] / scale, image;
+    cv::min(scaled, 1.0, scaled);
+    scaled.convertTo(image, CV_16UC1, 65535.0);
+    const std::string name = fmt::format("relit_{:03d}.png", i);
+    io::write_png16(settings.out / name, image);
+    const Vec3 l = settings.lights[i].normalized();
+    summary["frames"].push_back({{"file", name}, {"light", {l.x(), l.y(), l.z()}}});
+  }
+  std::ofstream json(settings.out / "relight.json");
+  json << summary.dump(2) << "\n";
+  if (!json) fail("{}: cannot write", (settings.out / "relight.json").string());
+  return summary;
+}
+
+}  // namespace lightstage::pipeline

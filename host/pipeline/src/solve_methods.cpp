@@ -1,0 +1,92 @@
+#include "lightstage/pipeline/solve_methods.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/pipeline/shape_prior_method.hpp"
+
+#include <fmt/format.h>
+
+#include <utility>
+
+namespace lightstage::pipeline {
+namespace {
+
+SolveResult solve_bipolynomial_order(const Observations& obs, const SolveSettings& settings, int order) {
+  BiPolynomialOptions options = settings.bipolynomial;
+  options.order = order;
+  return solve_bipolynomial(obs, options);
+}
+
+// The azimuth from isotropy (Alldrin–Kriegman) or from any other method's normals.
+SolveResult solve_monotonic_method(const Observations& obs, const SolveSettings& settings) {
+  if (settings.azimuth_from == "isotropy") return solve_monotonic(obs, settings.monotonic);
+  if (settings.azimuth_from == "monotonic")
+    fail("--azimuth-from: 'monotonic' cannot give its own azimuth (use isotropy or another method)");
+  const SolveResult azimuth = find_solve_method(settings.azimuth_from).solve(obs, settings);
+  SolveResult result = solve_monotonic(obs, settings.monotonic, azimuth.normals);
+  result.parameters["azimuth"] = settings.azimuth_from;
+  result.summary.seconds += azimuth.summary.seconds;
+  return result;
+}
+
+std::vector<SolveMethod>& registry() {
+  static std::vector<SolveMethod> methods = {
+      {"l2", "Lambertian least squares (Woodham)",
+       [](const Observations& obs, const SolveSettings& s) { return solve_lambertian(obs, s.l2); }},
+      {"robust", "Lambertian with shadow/highlight rejection and a robust estimator (--estimator)",
+       [](const Observations& obs, const SolveSettings& s) { return solve_robust(obs, s.robust); }},
+      {"monotonic", "elevation from reflectance monotonicity (Algorithm 1; --azimuth-from)",
+       solve_monotonic_method},
+      {"bilinear", "bi-polynomial reflectance, k = 1 (Algorithm 2)",
+       [](const Observations& obs, const SolveSettings& s) { return solve_bipolynomial_order(obs, s, 1); }},
+      {"biquadratic", "bi-polynomial reflectance, k = 2 (Algorithm 2)",
+       [](const Observations& obs, const SolveSettings& s) { return solve_bipolynomial_order(obs, s, 2); }},
+      {"bicubic", "bi-polynomial reflectance, k = 3 (Algorithm 2)",
+       [](const Observations& obs, const SolveSettings& s) { return solve_bipolynomial_order(obs, s, 3); }},
+      {"auto", "per pixel, biquadratic or monotonic from evidence in the data",
+       [](const Observations& obs, const SolveSettings& s) { return solve_auto(obs, s.automatic); }},
+      {"shape-prior",
+       "unknown general lighting and camera response, with a depth prior (Algorithm 3; --prior)",
+       [](const Observations& obs, const SolveSettings& s) { return solve_with_shape_prior(obs, s.shape_prior); }},
+  };
+  return methods;
+}
+
+}  // namespace
+
+const std::vector<SolveMethod>& solve_methods() { return registry(); }
+
+std::vector<std::string> solve_method_names() {
+  std::vector<std::string> names;
+  for (const auto& method : solve_methods()) names.push_back(method.name);
+  return names;
+}
+
+const SolveMethod& find_solve_method(const std::string& name) {
+  for (const auto& method : solve_methods()) {
+    if (name == method.name) return method;
+  }
+  fail("--method: unknown method '{}' (known: {})", name, fmt::join(solve_method_names(), ", "));
+}
+
+void register_solve_method(SolveMethod method) {
+  if (method.name.empty() || !method.solve) fail("register_solve_method: a method needs a name and a function");
+  for (const auto& known : solve_methods()) {
+    if (known.name == method.name) fail("register_solve_method: '{}' is already a method", method.name);
+  }
+  registry().push_back(std::move(method));
+}
+
+SolveResult solve_with(const Observations& observations, const SolveSettings& settings) {
+  return find_solve_method(settings.method).solve(observations, settings);
+}
+
+SolveWork solve_work(const SolveSettings& settings, const Observations& observations) {
+  if (settings.method == "shape-prior") {
+    const auto& o = settings.shape_prior.options;
+    return {"evaluations", o.refine ? static_cast<std::size_t>(o.max_evaluations) : 0};
+  }
+  const std::size_t passes = settings.method == "monotonic" && settings.azimuth_from != "isotropy" ? 2 : 1;
+  return {"px", observations.pixel_count() * passes};
+}
+
+}  // namespace lightstage::pipeline

@@ -1,0 +1,52 @@
+#include "lightstage/pipeline/solve_settings.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/pipeline/solve_methods.hpp"
+
+#include <charconv>
+
+namespace lightstage::pipeline {
+
+std::optional<double> parse_falloff(const std::string& text) {
+  if (text == "auto") return std::nullopt;
+  double value = 0;
+  const char* begin = text.data() + (text.starts_with('+') ? 1 : 0);  // from_chars takes no '+'
+  const char* end = text.data() + text.size();
+  const auto [at, error] = std::from_chars(begin, end, value);
+  if (begin == end || error != std::errc{} || at != end || !(value >= kMinFalloff && value <= kMaxFalloff))
+    fail("--falloff: expected 'auto' or a number in [{}, {}], got '{}'", kMinFalloff, kMaxFalloff, text);
+  return value;
+}
+
+void SolveSettings::set_progress(const SolveProgress& progress) {
+  l2.progress = robust.progress = monotonic.progress = bipolynomial.progress = automatic.progress = progress;
+  shape_prior.options.progress = progress;
+}
+
+void SolveSettings::resolve() {
+  find_solve_method(method);  // names the known methods when unknown
+  radiometry.clamp_to_one = !no_clamp;
+  robust.estimator = parse_robust_estimator(estimator);
+  if (azimuth_from != "isotropy") find_solve_method(azimuth_from);
+  auto& a = automatic;
+  if (shadow_threshold) {
+    l2.shadow_threshold = *shadow_threshold;
+    robust.shadow_threshold = monotonic.shadow_threshold = bipolynomial.shadow_threshold = *shadow_threshold;
+    a.monotonic.shadow_threshold = a.bipolynomial.shadow_threshold = *shadow_threshold;
+  }
+  if (t_low) l2.t_low = robust.t_low = bipolynomial.t_low = a.bipolynomial.t_low = *t_low;
+  if (min_observations)
+    l2.min_observations = robust.min_observations = monotonic.min_observations = *min_observations;
+  if (max_iterations) bipolynomial.max_iterations = a.bipolynomial.max_iterations = *max_iterations;
+  bipolynomial.falloff = a.bipolynomial.falloff = parse_falloff(falloff);
+  a.monotonic.gamma = monotonic.gamma;
+  a.monotonic.plateau_tolerance = monotonic.plateau_tolerance;
+  if (threads) l2.threads = robust.threads = monotonic.threads = bipolynomial.threads = a.threads = *threads;
+  // Only the chosen method's options are checked here: l2 takes
+  // --shadow-threshold -1, which the others refuse.
+  if (method == "monotonic") monotonic.check();
+  if (method == "bilinear" || method == "biquadratic" || method == "bicubic") bipolynomial.check();
+  if (method == "auto") a.check();
+}
+
+}  // namespace lightstage::pipeline
