@@ -1,6 +1,7 @@
 #include "lightstage/firmware/controller.hpp"
 
 #include "lightstage/common/log.hpp"
+#include "lightstage/firmware/led_request.hpp"
 #include "lightstage/firmware/realtime.hpp"
 
 #include <fmt/format.h>
@@ -8,7 +9,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <set>
 
 namespace lightstage::firmware {
 namespace {
@@ -149,38 +149,15 @@ std::vector<int> Controller::darken_now() {
   return were_lit;
 }
 
-std::optional<Refusal> Controller::check_levels(
-    const google::protobuf::RepeatedPtrField<proto::LedLevel>& leds) const {
-  std::set<std::uint32_t> seen;
-  for (const auto& led : leds) {
-    const bool known = std::any_of(rig_.leds.begin(), rig_.leds.end(),
-                                   [&](const Led& l) { return l.id == static_cast<int>(led.led_id()); });
-    if (!known)
-      return Refusal{proto::Error::BAD_REQUEST,
-                     fmt::format("rig '{}' has no LED {}", rig_.name, led.led_id())};
-    if (!seen.insert(led.led_id()).second) {
-      return Refusal{proto::Error::BAD_REQUEST, fmt::format("LED {} listed twice", led.led_id())};
-    }
-    if (!(led.level() >= 0 && led.level() <= 1)) {
-      return Refusal{proto::Error::BAD_REQUEST,
-                     fmt::format("LED {}: level {} outside 0..1", led.led_id(), led.level())};
-    }
-    if (led.level() > 0 && led.level() < 1) {
-      return Refusal{proto::Error::BAD_REQUEST,
-                     fmt::format("LED {}: level {}: these LED drivers cannot dim (levels are 0 or 1)",
-                                 led.led_id(), led.level())};
-    }
-  }
-  return std::nullopt;
-}
-
 std::optional<Refusal> Controller::set_leds(const proto::SetLeds& request) {
   join_if_finished();
   if (sequence_running_) {
     return Refusal{proto::Error::BUSY,
                    fmt::format("sequence {} is running; abort it first", status().sequence_id())};
   }
-  if (auto refusal = check_levels(request.leds())) return refusal;
+  if (auto problem = led_levels_problem(rig_, request.leds())) {
+    return Refusal{proto::Error::BAD_REQUEST, *problem};
+  }
   stop_job(proto::OK, "superseded by SetLeds");  // the hold; LEDs stay as they are for now
 
   std::vector<int> wanted;

@@ -1,13 +1,13 @@
 #include "lightstage/firmware/sequencer.hpp"
 
 #include "lightstage/common/log.hpp"
+#include "lightstage/firmware/led_request.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <set>
 
 namespace lightstage::firmware {
 namespace {
@@ -359,21 +359,7 @@ std::optional<Refusal> Sequencer::check_against(const proto::Sequence& sequence,
   std::int64_t t_ns = start_ns;
   for (int i = 0; i < sequence.steps_size(); ++i) {
     const proto::Step& step = sequence.steps(i);
-    std::set<std::uint32_t> seen;
-    for (const auto& led : step.leds()) {
-      const bool known = std::any_of(rig_.leds.begin(), rig_.leds.end(),
-                                     [&](const Led& l) { return l.id == static_cast<int>(led.led_id()); });
-      if (!known) return bad(fmt::format("step {}: rig '{}' has no LED {}", i, rig_.name, led.led_id()));
-      if (!seen.insert(led.led_id()).second)
-        return bad(fmt::format("step {}: LED {} listed twice", i, led.led_id()));
-      if (!(led.level() >= 0 && led.level() <= 1)) {
-        return bad(fmt::format("step {}: LED {} level {} outside 0..1", i, led.led_id(), led.level()));
-      }
-      if (led.level() > 0 && led.level() < 1) {
-        return bad(fmt::format("step {}: LED {} level {}: these LED drivers cannot dim (levels are 0 or 1)",
-                               i, led.led_id(), led.level()));
-      }
-    }
+    if (auto problem = led_levels_problem(rig_, step.leds(), i)) return bad(*problem);
     if (step.wait_strobe() && !strobe_) {
       return bad(fmt::format("step {} waits for the strobe, but rig '{}' has no strobe input", i, rig_.name));
     }

@@ -1,7 +1,7 @@
 #include "lightstage/host/radiometry.hpp"
 
 #include "lightstage/common/error.hpp"
-#include "util/parallel.hpp"
+#include "lightstage/common/parallel.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -180,23 +180,22 @@ Observations make_observations(const ImageStack& stack, const RadiometryOptions&
   for (const Frame& frame : stack.frames)
     frames.push_back(frame_constants(frame, frame.dark.empty() ? nullptr : &darks.at(frame.dark.data)));
   const bool colour = first.channels() == 3;
-  util::parallel_chunks(
-      obs.pixels.size(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-        switch (depth) {
-          case CV_8U:
-            convert_pixels<std::uint8_t>(frames, colour, obs.pixels, begin, end, options.clamp_to_one,
-                                         obs.intensities, obs.saturated);
-            break;
-          case CV_16U:
-            convert_pixels<std::uint16_t>(frames, colour, obs.pixels, begin, end, options.clamp_to_one,
-                                          obs.intensities, obs.saturated);
-            break;
-          default:
-            convert_pixels<float>(frames, colour, obs.pixels, begin, end, options.clamp_to_one,
-                                  obs.intensities, obs.saturated);
-            break;
-        }
-      });
+  parallel_chunks(obs.pixels.size(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    switch (depth) {
+      case CV_8U:
+        convert_pixels<std::uint8_t>(frames, colour, obs.pixels, begin, end, options.clamp_to_one,
+                                     obs.intensities, obs.saturated);
+        break;
+      case CV_16U:
+        convert_pixels<std::uint16_t>(frames, colour, obs.pixels, begin, end, options.clamp_to_one,
+                                      obs.intensities, obs.saturated);
+        break;
+      default:
+        convert_pixels<float>(frames, colour, obs.pixels, begin, end, options.clamp_to_one, obs.intensities,
+                              obs.saturated);
+        break;
+    }
+  });
   return obs;
 }
 

@@ -1,7 +1,7 @@
 #include "lightstage/sim/natural_lighting.hpp"
 
 #include "lightstage/common/error.hpp"
-#include "lightstage/sim/parallel.hpp"
+#include "lightstage/common/parallel.hpp"
 
 #include <algorithm>
 #include <cmath>

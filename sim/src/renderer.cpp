@@ -1,6 +1,6 @@
 #include "lightstage/sim/renderer.hpp"
 
-#include "lightstage/sim/parallel.hpp"
+#include "lightstage/common/parallel.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -2,7 +2,7 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
-#include "lightstage/sim/parallel.hpp"
+#include "lightstage/common/parallel.hpp"
 
 #include <fmt/format.h>
 

@@ -2,9 +2,9 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
+#include "lightstage/common/parallel.hpp"
 #include "lightstage/common/rig.hpp"
 #include "lightstage/common/version.hpp"
-#include "util/parallel.hpp"
 #include "util/utc_time.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -197,7 +197,7 @@ LightCalibrationRun calibrate_lights(const LightCalibrationOptions& options) {
     for (const std::size_t sphere_index : stack.spheres) {
       const MirrorSphere& sphere = cal.spheres[sphere_index].sphere;
       std::vector<SphereObservation> found(lights);
-      util::parallel_chunks(lights, options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+      parallel_chunks(lights, options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) {
           found[i].sphere = sphere_index;
           found[i].highlight = find_highlight(stack.images.grey[i], background, stack.images.saturated[i],

@@ -4,9 +4,9 @@
 #include "io/text_table.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/image_stack.hpp"
+#include "lightstage/common/parallel.hpp"
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/mask.hpp"
-#include "util/parallel.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -95,7 +95,7 @@ CalibrationImages load_calibration_images(const fs::path& folder, int min_images
   ImageStack stack;
   stack.frames.resize(names.size());
   for (std::size_t i = 0; i < names.size(); ++i) stack.frames[i].filename = names[i].text;
-  util::parallel_chunks(names.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+  parallel_chunks(names.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i)
       stack.frames[i].image = io::read_image(folder / stack.frames[i].filename);
   });
@@ -130,7 +130,7 @@ CalibrationImages load_calibration_images(const fs::path& folder, int min_images
   images.led_ids.resize(names.size());
   images.grey.resize(names.size());
   images.saturated.resize(names.size());
-  util::parallel_chunks(names.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+  parallel_chunks(names.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       convert(stack.frames[i], &images.grey[i], &images.saturated[i]);
       images.filenames[i] = stack.frames[i].filename;
@@ -146,19 +146,19 @@ cv::Mat median_image(const std::vector<cv::Mat>& images) {
   const cv::Size size = images.front().size();
   cv::Mat median(size, CV_32FC1);
   const std::size_t n = images.size();
-  util::parallel_chunks(static_cast<std::size_t>(size.height), 0,
-                        [&](std::size_t, std::size_t begin, std::size_t end) {
-                          std::vector<float> values(n);
-                          for (std::size_t r = begin; r < end; ++r) {
-                            const int row = static_cast<int>(r);
-                            for (int c = 0; c < size.width; ++c) {
-                              for (std::size_t i = 0; i < n; ++i) values[i] = images[i].at<float>(row, c);
-                              const auto middle = values.begin() + static_cast<std::ptrdiff_t>(n / 2);
-                              std::nth_element(values.begin(), middle, values.end());
-                              median.at<float>(row, c) = *middle;
-                            }
-                          }
-                        });
+  parallel_chunks(static_cast<std::size_t>(size.height), 0,
+                  [&](std::size_t, std::size_t begin, std::size_t end) {
+                    std::vector<float> values(n);
+                    for (std::size_t r = begin; r < end; ++r) {
+                      const int row = static_cast<int>(r);
+                      for (int c = 0; c < size.width; ++c) {
+                        for (std::size_t i = 0; i < n; ++i) values[i] = images[i].at<float>(row, c);
+                        const auto middle = values.begin() + static_cast<std::ptrdiff_t>(n / 2);
+                        std::nth_element(values.begin(), middle, values.end());
+                        median.at<float>(row, c) = *middle;
+                      }
+                    }
+                  });
   return median;
 }
 

@@ -1,7 +1,7 @@
 #include "lightstage/host/calibration/light_intensity.hpp"
 
 #include "lightstage/common/error.hpp"
-#include "util/parallel.hpp"
+#include "lightstage/common/parallel.hpp"
 
 #include <cmath>
 
@@ -73,7 +73,7 @@ IntensityResult fit_intensities(const CalibrationImages& images, const TargetSur
   // Shading at unit intensity and flat field, per light and pixel (0 = not used).
   std::vector<std::vector<float>> shading(n, std::vector<float>(m, 0.f));
   std::vector<std::vector<float>> value(n, std::vector<float>(m, 0.f));
-  util::parallel_chunks(n, 0, [&](std::size_t, std::size_t begin, std::size_t end) {
+  parallel_chunks(n, 0, [&](std::size_t, std::size_t begin, std::size_t end) {
     for (std::size_t j = begin; j < end; ++j) {
       if (!lights.measured[j]) continue;
       for (std::size_t i = 0; i < m; ++i) {

@@ -3,12 +3,12 @@
 #include "io/stack_manifest.hpp"
 #include "io/text_table.hpp"
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/parallel.hpp"
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/mask.hpp"
 #include "lightstage/host/io/normal_map.hpp"
 #include "lightstage/host/io/pfm.hpp"
 #include "util/atomic_file.hpp"
-#include "util/parallel.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -165,7 +165,7 @@ ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
     frame.light_direction = directions[i].value.normalized();
     if (!intensities.empty()) frame.light_intensity = intensities[i].value;
   }
-  util::parallel_chunks(names.size(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+  parallel_chunks(names.size(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i)
       stack.frames[i].image = read_image(dir / stack.frames[i].filename);
   });
@@ -264,17 +264,17 @@ void write_stack(const fs::path& dir, const ImageStack& stack, const nlohmann::j
   fs::create_directories(dir, error);
   if (error) fail("{}: cannot create folder: {}", dir.string(), error.message());
 
-  util::parallel_chunks(write_images ? stack.frames.size() : 0, 0,
-                        [&](std::size_t, std::size_t begin, std::size_t end) {
-                          for (std::size_t i = begin; i < end; ++i) {
-                            const fs::path path = dir / files.frames[i];
-                            if (stack.frames[i].image.depth() == CV_32F) {
-                              write_pfm(path, stack.frames[i].image);
-                            } else {
-                              write_png(path, stack.frames[i].image);
-                            }
-                          }
-                        });
+  parallel_chunks(write_images ? stack.frames.size() : 0, 0,
+                  [&](std::size_t, std::size_t begin, std::size_t end) {
+                    for (std::size_t i = begin; i < end; ++i) {
+                      const fs::path path = dir / files.frames[i];
+                      if (stack.frames[i].image.depth() == CV_32F) {
+                        write_pfm(path, stack.frames[i].image);
+                      } else {
+                        write_png(path, stack.frames[i].image);
+                      }
+                    }
+                  });
   for (const auto& [file, dark] : darks) {
     if (dark.depth() == CV_32F) {
       write_pfm(dir / file, dark);

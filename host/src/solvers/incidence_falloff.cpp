@@ -1,8 +1,8 @@
 #include "lightstage/host/solvers/incidence_falloff.hpp"
 
+#include "lightstage/common/parallel.hpp"
 #include "lightstage/host/solvers/bipolynomial.hpp"
 #include "solvers/lambert_fit.hpp"
-#include "util/parallel.hpp"
 
 #include <Eigen/QR>
 
@@ -113,7 +113,7 @@ FalloffEstimate estimate_incidence_falloff(const Observations& observations,
   const std::size_t stride = most == 0 ? 1 : std::max<std::size_t>(1, pixels / most + (pixels % most != 0));
   const std::size_t samples = (pixels + stride - 1) / stride;
   std::vector<double> kappas(samples, std::numeric_limits<double>::quiet_NaN());
-  util::parallel_chunks(samples, options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+  parallel_chunks(samples, options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     PixelObservations pixel;
     BiPolynomialWorkspace ws;
     for (std::size_t s = begin; s < end; ++s) {

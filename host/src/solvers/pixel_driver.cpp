@@ -1,7 +1,7 @@
 #include "solvers/pixel_driver.hpp"
 
 #include "lightstage/common/error.hpp"
-#include "util/parallel.hpp"
+#include "lightstage/common/parallel.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -47,8 +47,8 @@ double run_per_pixel(const Observations& observations, const DriverSettings& set
   if (k > 0) result.coefficients = cv::Mat(size, CV_32FC(k), cv::Scalar::all(0));
 
   const std::size_t pixels = observations.pixel_count();
-  std::vector<Counters> per_chunk(static_cast<std::size_t>(util::resolve_threads(settings.threads)));
-  util::parallel_chunks(pixels, settings.threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
+  std::vector<Counters> per_chunk(static_cast<std::size_t>(resolve_threads(settings.threads)));
+  parallel_chunks(pixels, settings.threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
     Counters& counters = per_chunk[chunk];
     const PixelCore core = make_core();
     PixelObservations data;

@@ -1,7 +1,7 @@
 #include "lightstage/host/surface/depth_normals.hpp"
 
 #include "lightstage/common/error.hpp"
-#include "util/parallel.hpp"
+#include "lightstage/common/parallel.hpp"
 
 #include <Eigen/Eigenvalues>
 
@@ -47,8 +47,8 @@ DepthNormals normals_from_depth(const cv::Mat& depth, const cv::Mat& valid, cons
   DepthNormals out;
   out.normals = cv::Mat::zeros(depth.size(), CV_32FC3);
   out.valid = cv::Mat::zeros(depth.size(), CV_8UC1);
-  util::parallel_chunks(
-      static_cast<std::size_t>(rows), util::resolve_threads(options.threads),
+  parallel_chunks(
+      static_cast<std::size_t>(rows), resolve_threads(options.threads),
       [&](std::size_t, std::size_t begin, std::size_t end) {
         for (int r = static_cast<int>(begin); r < static_cast<int>(end); ++r) {
           for (int c = 0; c < cols; ++c) {

@@ -94,7 +94,6 @@ class Controller {
   void send(const proto::ControllerMessage& message);
   void note_leds(std::uint32_t step, std::span<const int> leds_on);
   void fault(proto::Outcome why, const std::string& detail, const std::vector<int>& leds);
-  std::optional<Refusal> check_levels(const google::protobuf::RepeatedPtrField<proto::LedLevel>& leds) const;
 
   const Rig& rig_;
   DomeIo io_;

@@ -1,0 +1,33 @@
+#pragma once
+// Spreading independent work over std::threads, the first worker on the
+// caller's thread. Two ways to split it:
+// - parallel_chunks: contiguous, in-order ranges, one per thread, each with
+//   its chunk number, so per-chunk partial results can be merged in chunk
+//   order and give the same total for a given thread count;
+// - parallel_for: indices handed out one at a time, for work whose cost varies
+//   by index (image rows); results must not depend on which thread ran which
+//   index.
+
+#include <cstddef>
+#include <functional>
+
+namespace lightstage {
+
+// `requested` threads, or the hardware concurrency when it is 0 or less (at least 1).
+int resolve_threads(int requested);
+
+// Calls body(chunk, begin, end) for `chunks` contiguous, in-order ranges that
+// cover [0, count), each on its own thread. Returns the number of chunks used
+// (<= resolved threads, >= 1; one empty chunk when count is 0). Every chunk
+// runs to its end; an exception from a body is rethrown on the caller's thread
+// once all have finished (the first one, by chunk order).
+std::size_t parallel_chunks(
+    std::size_t count, int threads,
+    const std::function<void(std::size_t chunk, std::size_t begin, std::size_t end)>& body);
+
+// Calls body(i) once for every i in [0, n) (none when n <= 0) on up to
+// `threads` threads (resolve_threads). After an exception no further index is
+// started; the first exception thrown is rethrown on the caller's thread.
+void parallel_for(int n, int threads, const std::function<void(int)>& body);
+
+}  // namespace lightstage

@@ -1,0 +1,67 @@
+#include "lightstage/common/parallel.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <exception>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace lightstage {
+namespace {
+
+// Runs worker(0) on the caller's thread and worker(1..count-1) on their own,
+// then joins them all. `worker` must not throw.
+void run_workers(std::size_t count, const std::function<void(std::size_t)>& worker) {
+  std::vector<std::thread> threads;
+  threads.reserve(count - 1);
+  for (std::size_t w = 1; w < count; ++w) threads.emplace_back(worker, w);
+  worker(0);
+  for (auto& thread : threads) thread.join();
+}
+
+}  // namespace
+
+int resolve_threads(int requested) {
+  if (requested > 0) return requested;
+  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+}
+
+std::size_t parallel_chunks(std::size_t count, int threads,
+                            const std::function<void(std::size_t, std::size_t, std::size_t)>& body) {
+  const std::size_t chunks = std::max<std::size_t>(
+      1, std::min<std::size_t>(static_cast<std::size_t>(resolve_threads(threads)), count));
+  std::vector<std::exception_ptr> errors(chunks);
+  run_workers(chunks, [&](std::size_t chunk) {
+    try {
+      body(chunk, count * chunk / chunks, count * (chunk + 1) / chunks);
+    } catch (...) {
+      errors[chunk] = std::current_exception();
+    }
+  });
+  for (const auto& error : errors) {
+    if (error) std::rethrow_exception(error);
+  }
+  return chunks;
+}
+
+void parallel_for(int n, int threads, const std::function<void(int)>& body) {
+  const int workers = std::min(resolve_threads(threads), std::max(n, 1));
+  std::atomic<int> next{0};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  run_workers(static_cast<std::size_t>(workers), [&](std::size_t) {
+    for (int i = next++; i < n; i = next++) {
+      try {
+        body(i);
+      } catch (...) {
+        const std::lock_guard lock(error_mutex);
+        if (!error) error = std::current_exception();
+        next = n;  // stop handing out work
+      }
+    }
+  });
+  if (error) std::rethrow_exception(error);
+}
+
+}  // namespace lightstage

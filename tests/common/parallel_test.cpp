@@ -1,0 +1,178 @@
+#include "lightstage/common/parallel.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+#include <tuple>
+#include <vector>
+
+namespace lightstage {
+namespace {
+
+using ::testing::ElementsAre;
+
+TEST(ResolveThreads, KeepsAPositiveCountAndUsesEveryCoreForZeroOrLess) {
+  EXPECT_EQ(resolve_threads(1), 1);
+  EXPECT_EQ(resolve_threads(7), 7);
+  const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  EXPECT_EQ(resolve_threads(0), cores);
+  EXPECT_EQ(resolve_threads(-3), cores);
+}
+
+// (chunk, begin, end) of every call, sorted by chunk.
+std::vector<std::tuple<std::size_t, std::size_t, std::size_t>> chunks_of(std::size_t count, int threads,
+                                                                         std::size_t* used = nullptr) {
+  std::mutex mutex;
+  std::vector<std::tuple<std::size_t, std::size_t, std::size_t>> calls;
+  const std::size_t n =
+      parallel_chunks(count, threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
+        const std::lock_guard lock(mutex);
+        calls.emplace_back(chunk, begin, end);
+      });
+  if (used) *used = n;
+  std::sort(calls.begin(), calls.end());
+  return calls;
+}
+
+TEST(ParallelChunks, SplitsTheRangeIntoContiguousInOrderChunks) {
+  std::size_t used = 0;
+  EXPECT_THAT(chunks_of(10, 3, &used),
+              ElementsAre(std::tuple<std::size_t, std::size_t, std::size_t>{0, 0, 3},
+                          std::tuple<std::size_t, std::size_t, std::size_t>{1, 3, 6},
+                          std::tuple<std::size_t, std::size_t, std::size_t>{2, 6, 10}));
+  EXPECT_EQ(used, 3u);
+}
+
+TEST(ParallelChunks, UsesNoMoreChunksThanIndices) {
+  std::size_t used = 0;
+  const auto calls = chunks_of(2, 8, &used);
+  EXPECT_EQ(used, 2u);
+  ASSERT_EQ(calls.size(), 2u);
+  EXPECT_EQ(calls[0], (std::tuple<std::size_t, std::size_t, std::size_t>{0, 0, 1}));
+  EXPECT_EQ(calls[1], (std::tuple<std::size_t, std::size_t, std::size_t>{1, 1, 2}));
+}
+
+TEST(ParallelChunks, RunsOneEmptyChunkForNoWork) {
+  std::size_t used = 0;
+  EXPECT_THAT(chunks_of(0, 4, &used),
+              ElementsAre(std::tuple<std::size_t, std::size_t, std::size_t>{0, 0, 0}));
+  EXPECT_EQ(used, 1u);
+}
+
+TEST(ParallelChunks, ZeroThreadsMeansEveryCore) {
+  std::size_t used = 0;
+  const std::size_t count = 1000;
+  const auto calls = chunks_of(count, 0, &used);
+  EXPECT_EQ(used, std::min<std::size_t>(count, static_cast<std::size_t>(resolve_threads(0))));
+  EXPECT_EQ(calls.size(), used);
+  EXPECT_EQ(std::get<2>(calls.back()), count);
+}
+
+TEST(ParallelChunks, RunsTheFirstChunkOnTheCallersThread) {
+  std::thread::id first;
+  std::vector<std::thread::id> ids(4);
+  parallel_chunks(
+      4, 4, [&](std::size_t chunk, std::size_t, std::size_t) { ids[chunk] = std::this_thread::get_id(); });
+  EXPECT_EQ(ids[0], std::this_thread::get_id());
+  for (std::size_t chunk = 1; chunk < ids.size(); ++chunk) EXPECT_NE(ids[chunk], std::this_thread::get_id());
+}
+
+TEST(ParallelChunks, PerChunkSumsMergeToTheSameTotalForAnyThreadCount) {
+  std::vector<double> values(1001);
+  for (std::size_t i = 0; i < values.size(); ++i) values[i] = 1.0 / static_cast<double>(i + 1);
+  const auto total = [&](int threads) {
+    std::vector<double> partial(static_cast<std::size_t>(resolve_threads(threads)), 0.0);
+    parallel_chunks(values.size(), threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) partial[chunk] += values[i];
+    });
+    double sum = 0;
+    for (const double p : partial) sum += p;
+    return sum;
+  };
+  // Same thread count, same chunks, same bits.
+  EXPECT_EQ(total(3), total(3));
+  EXPECT_NEAR(total(1), total(5), 1e-12);
+}
+
+TEST(ParallelChunks, FinishesEveryChunkThenRethrowsTheFirstFailureByChunkOrder) {
+  std::atomic<int> finished{0};
+  std::atomic<bool> chunk3_failing{false};
+  try {
+    parallel_chunks(4, 4, [&](std::size_t chunk, std::size_t, std::size_t) {
+      if (chunk == 3) {
+        chunk3_failing = true;
+        throw std::logic_error("chunk 3");
+      }
+      if (chunk == 2) {
+        // Chunk 3 fails first in time; chunk 2's failure still wins, by order.
+        while (!chunk3_failing) std::this_thread::yield();
+        throw std::runtime_error("chunk 2");
+      }
+      ++finished;
+    });
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "chunk 2");
+  }
+  EXPECT_EQ(finished.load(), 2);
+}
+
+TEST(ParallelFor, CallsEveryIndexOnceForAnyThreadCount) {
+  for (const int threads : {0, 1, 2, 3, 16}) {
+    std::vector<std::atomic<int>> calls(257);
+    parallel_for(257, threads, [&](int i) { ++calls[static_cast<std::size_t>(i)]; });
+    for (std::size_t i = 0; i < calls.size(); ++i)
+      EXPECT_EQ(calls[i].load(), 1) << "threads " << threads << " index " << i;
+  }
+}
+
+TEST(ParallelFor, DoesNothingForAnEmptyRange) {
+  int calls = 0;
+  parallel_for(0, 4, [&](int) { ++calls; });
+  parallel_for(-2, 4, [&](int) { ++calls; });
+  EXPECT_EQ(calls, 0);
+}
+
+TEST(ParallelFor, PerIndexResultsDoNotDependOnTheThreadCount) {
+  const auto run = [](int threads) {
+    std::vector<double> rows(100);
+    parallel_for(100, threads, [&](int r) {
+      double v = 0;
+      for (int k = 0; k <= r; ++k) v += 1.0 / (k + 1.0);
+      rows[static_cast<std::size_t>(r)] = v;
+    });
+    return rows;
+  };
+  EXPECT_EQ(run(1), run(4));
+  EXPECT_EQ(run(1), run(0));
+}
+
+TEST(ParallelFor, RethrowsAWorkersExceptionOnTheCaller) {
+  EXPECT_THROW(parallel_for(50, 4,
+                            [](int i) {
+                              if (i == 17) throw std::runtime_error("index 17");
+                            }),
+               std::runtime_error);
+}
+
+TEST(ParallelFor, StartsNoFurtherIndexAfterAFailure) {
+  std::vector<int> ran;
+  try {
+    parallel_for(10, 1, [&](int i) {
+      ran.push_back(i);
+      if (i == 3) throw std::runtime_error("index 3");
+    });
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "index 3");
+  }
+  EXPECT_THAT(ran, ElementsAre(0, 1, 2, 3));
+}
+
+}  // namespace
+}  // namespace lightstage
