@@ -8,6 +8,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -38,7 +39,8 @@ struct ExrHeader {
 inline constexpr std::int64_t kExrMaxPixels = std::int64_t{1} << 26;
 inline constexpr int kExrMaxSide = 1 << 16;
 
-// An EXR file held in memory, its header parsed when opened.
+// An EXR file held in memory, its header parsed when opened. One read() at a
+// time: the reads share the in-memory stream's position.
 class ExrFile {
  public:
   // Throws InputError naming the file: unreadable, not an EXR, an unsupported
