@@ -7,6 +7,8 @@ find_package(fmt REQUIRED)
 find_package(spdlog REQUIRED)
 find_package(Threads REQUIRED)
 find_package(OpenCVModules REQUIRED)
+# EXR images through OpenEXR itself (libopenexr-dev; OpenEXR 3.1 on Debian 12).
+find_package(OpenEXR 3.1 CONFIG REQUIRED)
 find_package(PkgConfig)
 
 # Optional hardware backends: AUTO builds what is found.

@@ -8,6 +8,7 @@ packages=(
   clang libclang-rt-14-dev
   libeigen3-dev
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-photo-dev
+  libopenexr-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libgpiod-dev libusb-1.0-0-dev libcamera-dev

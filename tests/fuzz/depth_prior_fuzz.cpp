@@ -1,8 +1,9 @@
 // Depth priors come from sensors and other tools: any 16-bit PNG, PFM, PLY or
 // EXR bytes must give a depth map or an InputError. The first byte picks the
 // format (0 png, 1 pfm, 2 ply, 3 exr, modulo 4); the rest is the file. EXR
-// headers are parsed by the loader itself (fuzzed here) before OpenCV's
-// OpenEXR decodes the pixels of a header it accepted.
+// goes through io/exr.hpp (OpenEXR's header parser and decoder) and the
+// loader's checks of the channel and size before any pixel is decoded;
+// fuzz_exr covers the reader on its own, at any size.
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/surface/depth_prior.hpp"
 

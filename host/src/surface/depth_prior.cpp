@@ -1,151 +1,20 @@
 #include "lightstage/host/surface/depth_prior.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/host/io/exr.hpp"
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/pfm.hpp"
-
-#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstdlib>
-#include <fstream>
-#include <iterator>
 #include <string>
 #include <vector>
 
 namespace lightstage::surface {
 namespace {
 
-// OpenCV reads EXR through OpenEXR, but since 4.5.5 the codec is gated by the
-// environment variable OPENCV_IO_ENABLE_OPENEXR (upstream builds default it to
-// off; Debian 12's build to on), and OpenCV reads the variable only once, on
-// the process's first EXR decode. So it is set here, in the one place this
-// program means to decode EXR, before that first decode. A value the user set
-// (e.g. 0, to keep OpenEXR away from untrusted files) is left alone: the load
-// then fails with OpenCV's message naming the variable.
-void enable_opencv_exr() {
-  static const bool enabled = [] { return ::setenv("OPENCV_IO_ENABLE_OPENEXR", "1", 0) == 0; }();
-  (void)enabled;
-}
-
-// What the EXR header says about the file (openexr.com, "OpenEXR File Layout"):
-// enough to pick the depth channel and name what is wrong before decoding.
-struct ExrChannel {
-  std::string name;
-  std::size_t name_offset = 0;  // of the name's first byte in the file
-  std::int32_t pixel_type = 0;  // 0 UINT, 1 HALF, 2 FLOAT
-  std::int32_t x_sampling = 1, y_sampling = 1;
-};
-
-struct ExrBox {
-  std::int32_t x_min = 0, y_min = 0, x_max = -1, y_max = -1;
-  bool operator==(const ExrBox&) const = default;
-  std::int64_t width() const { return std::int64_t{x_max} - x_min + 1; }
-  std::int64_t height() const { return std::int64_t{y_max} - y_min + 1; }
-};
-
-class ExrHeaderReader {
- public:
-  ExrHeaderReader(const std::vector<std::uint8_t>& bytes, const std::string& file)
-      : bytes_(bytes), file_(file) {}
-
-  std::size_t position() const { return at_; }
-
-  // A NUL-terminated string of at most 255 characters (long names: attribute
-  // and channel names are limited to 255 bytes either way).
-  std::string string() {
-    std::string out;
-    while (true) {
-      need(1, "a name");
-      const char ch = static_cast<char>(bytes_[at_++]);
-      if (ch == '\0') return out;
-      if (out.size() == 255) fail("{}: EXR header: a name longer than 255 bytes (corrupt file)", file_);
-      out.push_back(ch);
-    }
-  }
-
-  std::int32_t int32() {
-    need(4, "a number");
-    std::uint32_t v = 0;
-    for (int i = 3; i >= 0; --i) v = (v << 8) | bytes_[at_ + static_cast<std::size_t>(i)];
-    at_ += 4;
-    return static_cast<std::int32_t>(v);
-  }
-
-  void skip(std::size_t n, const char* what) {
-    need(n, what);
-    at_ += n;
-  }
-
-  void need(std::size_t n, const char* what) const {
-    if (bytes_.size() - at_ < n) fail("{}: EXR header ends inside {} (truncated file)", file_, what);
-  }
-
- private:
-  const std::vector<std::uint8_t>& bytes_;
-  const std::string& file_;
-  std::size_t at_ = 0;
-};
-
-struct ExrHeader {
-  std::vector<ExrChannel> channels;
-  ExrBox data_window, display_window;
-};
-
-ExrHeader read_exr_header(const std::vector<std::uint8_t>& bytes, const std::string& file) {
-  ExrHeaderReader in(bytes, file);
-  if (bytes.size() < 8 || bytes[0] != 0x76 || bytes[1] != 0x2f || bytes[2] != 0x31 || bytes[3] != 0x01)
-    fail("{}: not an OpenEXR file (no EXR magic number)", file);
-  in.skip(4, "the magic number");
-  const auto version = static_cast<std::uint32_t>(in.int32());
-  if ((version & 0xffu) != 2) fail("{}: EXR version {} is not supported (2 is)", file, version & 0xffu);
-  if (version & 0x1800u)  // bit 11: deep data, bit 12: multi-part
-    fail("{}: deep or multi-part EXR files are not read; write the depth as a single-part image", file);
-  ExrHeader header;
-  bool have_channels = false, have_data = false, have_display = false;
-  while (true) {
-    const std::string name = in.string();
-    if (name.empty()) break;
-    const std::string type = in.string();
-    const std::int32_t size = in.int32();
-    if (size < 0) fail("{}: EXR header: attribute '{}' has a negative size", file, name);
-    in.need(static_cast<std::size_t>(size), "an attribute");
-    const std::size_t end = in.position() + static_cast<std::size_t>(size);
-    if (name == "channels" && type == "chlist") {
-      have_channels = true;
-      while (true) {
-        if (in.position() >= end) fail("{}: EXR header: channel list is not terminated", file);
-        ExrChannel channel;
-        channel.name_offset = in.position();
-        channel.name = in.string();
-        if (channel.name.empty()) break;
-        channel.pixel_type = in.int32();
-        in.skip(4, "a channel");  // pLinear and three reserved bytes
-        channel.x_sampling = in.int32();
-        channel.y_sampling = in.int32();
-        header.channels.push_back(std::move(channel));
-      }
-    } else if ((name == "dataWindow" || name == "displayWindow") && type == "box2i" && size == 16) {
-      ExrBox& box = name == "dataWindow" ? header.data_window : header.display_window;
-      (name == "dataWindow" ? have_data : have_display) = true;
-      box.x_min = in.int32();
-      box.y_min = in.int32();
-      box.x_max = in.int32();
-      box.y_max = in.int32();
-    }
-    if (in.position() != end) {
-      if (in.position() > end) fail("{}: EXR header: attribute '{}' overruns its size", file, name);
-      in.skip(end - in.position(), "an attribute");
-    }
-  }
-  if (!have_channels) fail("{}: EXR header has no channel list", file);
-  if (!have_data || !have_display) fail("{}: EXR header lacks its data or display window", file);
-  return header;
-}
-
-std::string channel_names(const std::vector<ExrChannel>& channels) {
+std::string channel_names(const std::vector<io::ExrChannel>& channels) {
   std::string out;
   for (const auto& channel : channels) out += (out.empty() ? "" : ", ") + channel.name;
   return out.empty() ? "none" : out;
@@ -156,49 +25,27 @@ std::string channel_names(const std::vector<ExrChannel>& channels) {
 // HALF or FLOAT, unsubsampled, the data window the whole (display) frame.
 cv::Mat read_exr_depth(const std::filesystem::path& path, const cv::Size& expected) {
   const std::string file = path.string();
-  std::vector<std::uint8_t> bytes;
-  {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) fail("{}: cannot open for reading", file);
-    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    if (in.bad()) fail("{}: read error", file);
-  }
-  const ExrHeader header = read_exr_header(bytes, file);
+  const io::ExrFile exr(path);
+  const io::ExrHeader& header = exr.header();
   if (header.channels.size() != 1)
     fail("{}: a depth EXR must have one channel (named Y, Z or R), this has {} ({})", file,
          header.channels.size(), channel_names(header.channels));
-  const ExrChannel& channel = header.channels.front();
+  const io::ExrChannel& channel = header.channels.front();
   if (channel.name != "Y" && channel.name != "Z" && channel.name != "R")
     fail("{}: EXR channel '{}': a depth channel must be named Y, Z or R", file, channel.name);
-  if (channel.pixel_type != 1 && channel.pixel_type != 2)
-    fail("{}: EXR channel '{}' is {}: depth must be HALF or FLOAT", file, channel.name,
-         channel.pixel_type == 0 ? "UINT" : "of an unknown pixel type");
+  if (channel.type == io::ExrPixelType::uint32)
+    fail("{}: EXR channel '{}' is UINT: depth must be HALF or FLOAT", file, channel.name);
   if (channel.x_sampling != 1 || channel.y_sampling != 1)
     fail("{}: EXR channel '{}' is subsampled ({}x{}); depth must have a value per pixel", file, channel.name,
          channel.x_sampling, channel.y_sampling);
-  if (!(header.data_window == header.display_window))
+  if (header.cropped)
     fail("{}: EXR data window differs from the display window (a cropped image); write the whole frame",
          file);
-  // Checked before decoding: OpenEXR allocates what the header asks for.
-  if (header.data_window.width() != expected.width || header.data_window.height() != expected.height)
-    fail("{}: depth prior is {}x{} but the images are {}x{}", file, header.data_window.width(),
-         header.data_window.height(), expected.width, expected.height);
-  // OpenCV decodes a lone Y channel as grey and knows no Z; R alone it would
-  // widen to three channels. Either is renamed Y in memory (one byte, same
-  // length: nothing else in the file moves) before decoding.
-  bytes[channel.name_offset] = 'Y';
-  enable_opencv_exr();
-  cv::Mat image;
-  try {
-    image = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception& e) {
-    fail("{}: cannot decode EXR channel '{}': {}", file, channel.name, e.what());
-  }
-  if (image.empty()) fail("{}: cannot decode EXR channel '{}' (corrupt file)", file, channel.name);
-  if (image.type() != CV_32FC1 || image.size() != expected)
-    fail("{}: EXR channel '{}' decoded to {}x{} of type {}, expected {}x{} floats", file, channel.name,
-         image.cols, image.rows, image.type(), expected.width, expected.height);
-  return image;
+  // Checked before decoding, so that only the expected pixels are allocated.
+  if (header.size != expected)
+    fail("{}: depth prior is {}x{} but the images are {}x{}", file, header.size.width, header.size.height,
+         expected.width, expected.height);
+  return exr.read({channel.name});
 }
 
 }  // namespace

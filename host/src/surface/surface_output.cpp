@@ -1,6 +1,7 @@
 #include "lightstage/host/surface/surface_output.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/host/io/exr.hpp"
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/surface/mesh.hpp"
@@ -17,6 +18,8 @@ nlohmann::json write_surface_outputs(const std::filesystem::path& dir, const Sur
   std::filesystem::create_directories(dir, ec);
   if (ec) fail("{}: cannot create the output folder: {}", dir.string(), ec.message());
   io::write_pfm(dir / "depth.pfm", surface.depth);
+  // Z: the OpenEXR name for depth (and one a depth prior may be read from).
+  io::write_exr(dir / "depth.exr", surface.depth, {"Z"});
   double lo = 0, hi = 0;
   const bool any = cv::countNonZero(surface.valid) > 0;
   if (any) cv::minMaxLoc(surface.depth, &lo, &hi, nullptr, nullptr, surface.valid);
@@ -29,7 +32,8 @@ nlohmann::json write_surface_outputs(const std::filesystem::path& dir, const Sur
             static_cast<std::uint16_t>(1 + std::lround((surface.depth.at<float>(r, c) - lo) / span * 65534));
   io::write_png16(dir / "depth.png", png);
   nlohmann::json j = {
-      {"depth", {{"pfm", "depth.pfm"}, {"png", "depth.png"}, {"png_min", lo}, {"png_max", hi}}},
+      {"depth",
+       {{"pfm", "depth.pfm"}, {"exr", "depth.exr"}, {"png", "depth.png"}, {"png_min", lo}, {"png_max", hi}}},
       {"camera", camera.perspective_model()
                      ? nlohmann::json{{"model", "perspective"},
                                       {"K",

@@ -28,7 +28,7 @@ struct DepthMap {
 
 // By extension: .png (16-bit grey; 0 = no depth), .pfm (one channel; 0 or not
 // finite = no depth), .exr (one HALF or FLOAT channel named Y, Z or R, read
-// through OpenCV; 0 or not finite = no depth), .ply (a mesh in the camera
+// through io/exr.hpp; 0 or not finite = no depth), .ply (a mesh in the camera
 // frame, rendered with a z-buffer). The result has the camera's size; throws InputError naming the
 // file when it is unreadable, of another size, or holds no depth at all.
 DepthMap load_depth_prior(const std::filesystem::path& path, const CameraModel& camera,

@@ -1,0 +1,249 @@
+#include "lightstage/host/io/exr.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "util/atomic_file.hpp"
+
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfCompression.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfIO.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfTileDescription.h>
+#include <OpenEXR/ImfVersion.h>
+#include <OpenEXR/ImfXdr.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+#include <exception>
+#include <fstream>
+#include <iterator>
+#include <set>
+#include <utility>
+
+namespace lightstage::io {
+
+// The file's bytes as an OpenEXR input stream. A read past the end is
+// remembered, so that a failure can be told apart as a truncated file.
+struct ExrFile::Bytes : Imf::IStream {
+  Bytes(std::string bytes, const std::string& name) : Imf::IStream(name.c_str()), data(std::move(bytes)) {}
+
+  bool read(char c[], int n) override {
+    if (n < 0 || static_cast<std::uint64_t>(n) > data.size() - std::min<std::uint64_t>(at, data.size())) {
+      ran_out = true;
+      throw Iex::InputExc("unexpected end of file");
+    }
+    std::memcpy(c, data.data() + at, static_cast<std::size_t>(n));
+    at += static_cast<std::uint64_t>(n);
+    return at < data.size();
+  }
+  std::uint64_t tellg() override { return at; }
+  void seekg(std::uint64_t pos) override { at = pos; }
+
+  std::string data;
+  std::uint64_t at = 0;
+  bool ran_out = false;
+};
+
+namespace {
+
+// An OpenEXR output stream into memory; the file is written in one go after.
+class StringOStream : public Imf::OStream {
+ public:
+  explicit StringOStream(const std::string& name) : Imf::OStream(name.c_str()) {}
+
+  void write(const char c[], int n) override {
+    const auto count = static_cast<std::size_t>(n);
+    if (data_.size() < at_ + count) data_.resize(at_ + count);
+    std::memcpy(data_.data() + at_, c, count);
+    at_ += count;
+  }
+  std::uint64_t tellp() override { return at_; }
+  void seekp(std::uint64_t pos) override { at_ = static_cast<std::size_t>(pos); }
+
+  const std::string& data() const { return data_; }
+
+ private:
+  std::string data_;
+  std::size_t at_ = 0;
+};
+
+ExrPixelType pixel_type(Imf::PixelType type) {
+  switch (type) {
+    case Imf::UINT:
+      return ExrPixelType::uint32;
+    case Imf::HALF:
+      return ExrPixelType::half;
+    default:
+      return ExrPixelType::float32;
+  }
+}
+
+std::string quoted_list(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& name : names) out += (out.empty() ? "'" : ", '") + name + "'";
+  return out;
+}
+
+std::string read_whole_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail("{}: cannot open for reading", path.string());
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) fail("{}: read error", path.string());
+  return bytes;
+}
+
+}  // namespace
+
+const char* to_string(ExrPixelType type) {
+  switch (type) {
+    case ExrPixelType::uint32:
+      return "UINT";
+    case ExrPixelType::half:
+      return "HALF";
+    case ExrPixelType::float32:
+      return "FLOAT";
+  }
+  return "?";
+}
+
+ExrFile::ExrFile(const std::filesystem::path& path) : ExrFile(read_whole_file(path), path.string()) {}
+
+ExrFile::ExrFile(std::string bytes, std::string name)
+    : name_(std::move(name)), bytes_(std::make_unique<Bytes>(std::move(bytes), name_)) {
+  parse_header();
+}
+
+ExrFile::~ExrFile() = default;
+ExrFile::ExrFile(ExrFile&&) noexcept = default;
+ExrFile& ExrFile::operator=(ExrFile&&) noexcept = default;
+
+void ExrFile::parse_header() {
+  Bytes& in = *bytes_;
+  if (in.data.size() < 4 || !Imf::isImfMagic(in.data.data()))
+    fail("{}: not an OpenEXR file (no EXR magic number)", name_);
+  Imf::Header header;
+  int version = 0;
+  try {
+    in.seekg(4);
+    Imf::Xdr::read<Imf::StreamIO>(in, version);
+    if (Imf::getVersion(version) != Imf::EXR_VERSION)
+      fail("{}: EXR version {} is not supported ({} is)", name_, Imf::getVersion(version), Imf::EXR_VERSION);
+    if (Imf::isMultiPart(version) || Imf::isNonImage(version))
+      fail("{}: deep or multi-part EXR files are not read; write a single-part flat image", name_);
+    header.readFrom(in, version);
+    header.sanityCheck(Imf::isTiled(version));
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    if (in.ran_out) fail("{}: EXR header ends inside the file (truncated file)", name_);
+    fail("{}: EXR header: {}", name_, e.what());
+  }
+  const Imath::Box2i data = header.dataWindow();
+  const std::int64_t width = std::int64_t{data.max.x} - data.min.x + 1;
+  const std::int64_t height = std::int64_t{data.max.y} - data.min.y + 1;
+  if (width < 1 || height < 1 || width > kExrMaxSide || height > kExrMaxSide ||
+      width * height > kExrMaxPixels)
+    fail("{}: EXR image is {}x{}; at most {} pixels, {} a side, are read", name_, width, height,
+         kExrMaxPixels, kExrMaxSide);
+  header_.size = cv::Size(static_cast<int>(width), static_cast<int>(height));
+  header_.cropped = data != header.displayWindow();
+  header_.tiled = Imf::isTiled(version);
+  if (header_.tiled) {
+    // OpenEXR sizes its tile-offset tables from the header: bound the tile count too.
+    const Imf::TileDescription& tiles = header.tileDescription();
+    const std::int64_t count =
+        ((width + tiles.xSize - 1) / tiles.xSize) * ((height + tiles.ySize - 1) / tiles.ySize);
+    if (count > (std::int64_t{1} << 20))
+      fail("{}: EXR tiles of {}x{} make {} tiles for a {}x{} image; use larger tiles or scan lines", name_,
+           tiles.xSize, tiles.ySize, count, width, height);
+  }
+  for (auto it = header.channels().begin(); it != header.channels().end(); ++it)
+    header_.channels.push_back(
+        {it.name(), pixel_type(it.channel().type), it.channel().xSampling, it.channel().ySampling});
+}
+
+cv::Mat ExrFile::read(const std::vector<std::string>& channels) const {
+  if (channels.empty() || channels.size() > 4)
+    fail("{}: cannot read {} EXR channels at once (1 to 4)", name_, channels.size());
+  std::vector<std::string> present;
+  for (const auto& channel : header_.channels) present.push_back(channel.name);
+  std::set<std::string> seen;
+  for (const auto& name : channels) {
+    if (!seen.insert(name).second) fail("{}: EXR channel '{}' asked for twice", name_, name);
+    const auto it = std::find_if(header_.channels.begin(), header_.channels.end(),
+                                 [&](const ExrChannel& channel) { return channel.name == name; });
+    if (it == header_.channels.end())
+      fail("{}: EXR has no channel '{}' (it has {})", name_, name,
+           present.empty() ? std::string("none") : quoted_list(present));
+    if (it->x_sampling != 1 || it->y_sampling != 1)
+      fail("{}: EXR channel '{}' is subsampled ({}x{}); a value per pixel is needed", name_, name,
+           it->x_sampling, it->y_sampling);
+  }
+  if (header_.cropped)
+    fail("{}: EXR data window differs from the display window (a cropped image); write the whole frame",
+         name_);
+
+  const int n = static_cast<int>(channels.size());
+  cv::Mat image(header_.size, CV_MAKETYPE(CV_32F, n));
+  Bytes& in = *bytes_;
+  in.ran_out = false;
+  try {
+    in.seekg(0);
+    Imf::InputFile file(in);
+    Imf::FrameBuffer frame;
+    const Imath::Box2i& data = file.header().dataWindow();
+    for (int i = 0; i < n; ++i)
+      frame.insert(channels[static_cast<std::size_t>(i)],
+                   Imf::Slice::Make(Imf::FLOAT, image.ptr<float>() + i, data,
+                                    sizeof(float) * static_cast<std::size_t>(n), image.step[0]));
+    file.setFrameBuffer(frame);
+    file.readPixels(data.min.y, data.max.y);
+  } catch (const std::exception& e) {
+    fail("{}: cannot decode EXR channel{} {}: {}{}", name_, n == 1 ? "" : "s", quoted_list(channels),
+         e.what(), in.ran_out ? " (truncated file)" : "");
+  }
+  return image;
+}
+
+cv::Mat read_exr(const std::filesystem::path& path, const std::vector<std::string>& channels) {
+  return ExrFile(path).read(channels);
+}
+
+void write_exr(const std::filesystem::path& path, const cv::Mat& image,
+               const std::vector<std::string>& channels) {
+  const std::string file = path.string();
+  if (image.empty() || image.depth() != CV_32F || (image.channels() != 1 && image.channels() != 3))
+    fail("{}: cannot write as EXR: expected CV_32FC1 or CV_32FC3, got depth code {} with {} channel(s)", file,
+         image.depth(), image.channels());
+  const auto n = static_cast<std::size_t>(image.channels());
+  if (channels.size() != n)
+    fail("{}: cannot write as EXR: {} channel name(s) for {} channel(s)", file, channels.size(), n);
+  std::set<std::string> seen;
+  for (const auto& name : channels) {
+    if (name.empty() || name.size() > 255)
+      fail("{}: cannot write as EXR: channel name '{}' (1 to 255 bytes)", file, name);
+    if (!seen.insert(name).second) fail("{}: cannot write as EXR: channel name '{}' repeated", file, name);
+  }
+  StringOStream out(file);
+  try {
+    Imf::Header header(image.cols, image.rows);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    for (const auto& name : channels) header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+    Imf::OutputFile exr(out, header);
+    Imf::FrameBuffer frame;
+    for (std::size_t i = 0; i < n; ++i)
+      frame.insert(channels[i],
+                   Imf::Slice(Imf::FLOAT, const_cast<char*>(image.ptr<char>()) + i * sizeof(float),
+                              n * sizeof(float), image.step[0]));
+    exr.setFrameBuffer(frame);
+    exr.writePixels(image.rows);
+  } catch (const std::exception& e) {
+    fail("{}: cannot write as EXR: {}", file, e.what());
+  }
+  util::write_text_atomic(path, out.data());
+}
+
+}  // namespace lightstage::io
