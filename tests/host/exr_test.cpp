@@ -70,7 +70,7 @@ TEST(Exr, OneChannelRoundTripIsExact) {
   EXPECT_FALSE(file.header().tiled);
   ASSERT_EQ(file.header().channels.size(), 1u);
   EXPECT_EQ(file.header().channels[0].name, "Z");
-  EXPECT_EQ(file.header().channels[0].type, ExrPixelType::float32);
+  EXPECT_EQ(file.header().channels[0].type, ExrPixelType::kFloat32);
   expect_same(file.read({"Z"}), image);
   expect_same(read_exr(path, {"Z"}), image);
 }
@@ -95,7 +95,7 @@ TEST(Exr, ThreeChannelsKeepTheCallersOrder) {
   ASSERT_EQ(file.header().channels.size(), 3u);
   EXPECT_EQ(file.header().channels[0].name, "B");
   EXPECT_EQ(file.header().channels[2].name, "R");
-  for (const auto& channel : file.header().channels) EXPECT_EQ(channel.type, ExrPixelType::float32);
+  for (const auto& channel : file.header().channels) EXPECT_EQ(channel.type, ExrPixelType::kFloat32);
 }
 
 TEST(Exr, NonContinuousImagesAndLongNamesAreWritten) {
@@ -220,8 +220,8 @@ TEST(Exr, TiledHalfUintCroppedAndSubsampledFiles) {
 
   const ExrFile mixed = corpus_file("z-half-a-uint-cropped-rle.exr.bin");
   ASSERT_EQ(mixed.header().channels.size(), 2u);
-  EXPECT_EQ(mixed.header().channels[0].type, ExrPixelType::uint32);
-  EXPECT_EQ(mixed.header().channels[1].type, ExrPixelType::half);
+  EXPECT_EQ(mixed.header().channels[0].type, ExrPixelType::kUint32);
+  EXPECT_EQ(mixed.header().channels[1].type, ExrPixelType::kHalf);
   EXPECT_TRUE(mixed.header().cropped);
   EXPECT_EQ(mixed.header().size, cv::Size(8, 6));
   EXPECT_NE(error_of([&] {

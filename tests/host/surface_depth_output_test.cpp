@@ -36,7 +36,7 @@ TEST(SurfaceOutput, DepthExrEqualsTheDepthMap) {
   const io::ExrFile exr(dir / "depth.exr");
   ASSERT_EQ(exr.header().channels.size(), 1u);
   EXPECT_EQ(exr.header().channels[0].name, "Z");
-  EXPECT_EQ(exr.header().channels[0].type, io::ExrPixelType::float32);
+  EXPECT_EQ(exr.header().channels[0].type, io::ExrPixelType::kFloat32);
   const cv::Mat depth = exr.read({"Z"});
   ASSERT_EQ(depth.type(), CV_32FC1);
   ASSERT_EQ(depth.size(), camera.size);

@@ -74,7 +74,8 @@ class Module(Scratch):
             self.assertEqual(result["summary"]["pixels_solved"], summary["pixels_solved"])
             self.assertAlmostEqual(result["summary"]["error_vs_ground_truth"]["mean_deg"],
                                    summary["error_vs_ground_truth"]["mean_deg"], places=9)
-            # Float outputs are bit for bit the CLI's; normals to the PNG's 16-bit step.
+            # Bit for bit the CLI's float outputs; normal.png to its 16-bit step.
+            np.testing.assert_array_equal(result["normals"], lightstage.read_exr(out / "normal.exr", ["R", "G", "B"]))
             np.testing.assert_array_equal(result["albedo"], lightstage.read_pfm(out / "albedo.pfm"))
             np.testing.assert_array_equal(result["residual"], lightstage.read_pfm(out / "residual.pfm"))
             normals, valid = lightstage.read_normal_map(out / "normal.png")
@@ -124,6 +125,7 @@ class DiligentBall(Scratch):
         self.assertAlmostEqual(result["summary"]["error_vs_ground_truth"]["mean_deg"], 4.10, delta=0.01)
         out = self.dir / "ball"
         cli("solve", "--input", ball, "--out", out, "--quiet")
+        np.testing.assert_array_equal(result["normals"], lightstage.read_exr(out / "normal.exr", ["R", "G", "B"]))
         np.testing.assert_array_equal(result["albedo"], lightstage.read_pfm(out / "albedo.pfm"))
         normals, valid = lightstage.read_normal_map(out / "normal.png")
         np.testing.assert_array_equal(valid, result["solved"])

@@ -7,6 +7,7 @@
 #include "lightstage/common/version.hpp"
 #include "lightstage/host/calibration/calibrate_lights.hpp"
 #include "lightstage/host/eval/angular_error.hpp"
+#include "lightstage/host/io/exr.hpp"
 #include "lightstage/host/io/normal_map.hpp"
 #include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/io/stack_io.hpp"
@@ -219,6 +220,13 @@ PYBIND11_MODULE(lightstage, m) {
   m.def(
       "read_pfm", [](const fs::path& path) { return to_numpy(io::read_pfm(path)); }, py::arg("path"),
       "A PFM file (albedo.pfm, residual.pfm, ...) as a float32 array, row 0 at the top.");
+  m.def(
+      "read_exr",
+      [](const fs::path& path, const std::vector<std::string>& channels) {
+        return to_numpy(io::read_exr(path, channels));
+      },
+      py::arg("path"), py::arg("channels"),
+      "The named channels of an EXR file (normal.exr: R G B = x y z; albedo.exr: Y; depth.exr: Z) as float32.");
   m.def(
       "read_normal_map",
       [](const fs::path& path) {

@@ -73,11 +73,11 @@ class StringOStream : public Imf::OStream {
 ExrPixelType pixel_type(Imf::PixelType type) {
   switch (type) {
     case Imf::UINT:
-      return ExrPixelType::uint32;
+      return ExrPixelType::kUint32;
     case Imf::HALF:
-      return ExrPixelType::half;
+      return ExrPixelType::kHalf;
     default:
-      return ExrPixelType::float32;
+      return ExrPixelType::kFloat32;
   }
 }
 
@@ -99,11 +99,11 @@ std::string read_whole_file(const std::filesystem::path& path) {
 
 const char* to_string(ExrPixelType type) {
   switch (type) {
-    case ExrPixelType::uint32:
+    case ExrPixelType::kUint32:
       return "UINT";
-    case ExrPixelType::half:
+    case ExrPixelType::kHalf:
       return "HALF";
-    case ExrPixelType::float32:
+    case ExrPixelType::kFloat32:
       return "FLOAT";
   }
   return "?";

@@ -2,6 +2,7 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/version.hpp"
+#include "lightstage/host/io/exr.hpp"
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/normal_map.hpp"
 #include "lightstage/host/io/pfm.hpp"
@@ -56,6 +57,8 @@ nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const Solve
   write_png16(dir / "albedo.png", albedo16);
   write_pfm(dir / "albedo.pfm", result.albedo);
   write_pfm(dir / "residual.pfm", result.residual);
+  write_exr(dir / "normal.exr", result.normals, {"R", "G", "B"});  // R = x, as in normal.png
+  write_exr(dir / "albedo.exr", result.albedo, {"Y"});
 
   nlohmann::json summary = result.summary.to_json();
   summary["parameters"] = result.parameters;
@@ -69,7 +72,9 @@ nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const Solve
                       {"normals_visualisation", "normal_vis.png"},
                       {"albedo", "albedo.png"},
                       {"albedo_float", "albedo.pfm"},
-                      {"residual", "residual.pfm"}};
+                      {"residual", "residual.pfm"},
+                      {"normals_exr", "normal.exr"},
+                      {"albedo_exr", "albedo.exr"}};
   // Optional per-pixel outputs: confidence and a per-pixel reflectance model (one PFM per coefficient).
   if (!result.confidence.empty()) {
     write_pfm(dir / "confidence.pfm", result.confidence);
@@ -167,6 +172,15 @@ SolveFolder read_solve_folder(const fs::path& dir) {
   folder.normals = normals.normals;
   folder.solved = normals.valid;
   const cv::Size size = folder.normals.size();
+  if (fs::exists(dir / "normal.exr")) {
+    // The float normals, where normal.png holds one (the PNG is 16-bit).
+    const cv::Mat exact = read_exr(dir / "normal.exr", {"R", "G", "B"});
+    if (exact.size() != size)
+      fail("{}: {}x{} but normal.png is {}x{}", (dir / "normal.exr").string(), exact.cols, exact.rows, size.width,
+           size.height);
+    folder.normals = cv::Mat(size, CV_32FC3, cv::Scalar::all(0));
+    exact.copyTo(folder.normals, folder.solved);
+  }
   if (fs::exists(dir / "summary.json")) folder.summary = read_summary(dir / "summary.json");
   const auto scale = folder.summary.find("albedo_png_scale");
   if (scale != folder.summary.end() && scale->is_number() && std::isfinite(scale->get<double>()) &&

@@ -33,7 +33,7 @@ cv::Mat read_exr_depth(const std::filesystem::path& path, const cv::Size& expect
   const io::ExrChannel& channel = header.channels.front();
   if (channel.name != "Y" && channel.name != "Z" && channel.name != "R")
     fail("{}: EXR channel '{}': a depth channel must be named Y, Z or R", file, channel.name);
-  if (channel.type == io::ExrPixelType::uint32)
+  if (channel.type == io::ExrPixelType::kUint32)
     fail("{}: EXR channel '{}' is UINT: depth must be HALF or FLOAT", file, channel.name);
   if (channel.x_sampling != 1 || channel.y_sampling != 1)
     fail("{}: EXR channel '{}' is subsampled ({}x{}); depth must have a value per pixel", file, channel.name,

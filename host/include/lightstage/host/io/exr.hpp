@@ -16,13 +16,13 @@
 
 namespace lightstage::io {
 
-enum class ExrPixelType { uint32, half, float32 };
+enum class ExrPixelType { kUint32, kHalf, kFloat32 };
 
 const char* to_string(ExrPixelType type);
 
 struct ExrChannel {
   std::string name;
-  ExrPixelType type = ExrPixelType::float32;
+  ExrPixelType type = ExrPixelType::kFloat32;
   int x_sampling = 1, y_sampling = 1;
 };
 

@@ -7,6 +7,8 @@
 //                   scale = the 99.5th percentile of the solved albedo (recorded in summary.json)
 //   albedo.pfm      float albedo (0 where not solved)
 //   residual.pfm    float RMS residual of the fit (0 where not solved)
+//   normal.exr      float normals, channels R G B = x y z (0 where not solved)
+//   albedo.exr      float albedo, channel Y
 //   summary.json    method, parameters, summary fields, time, input, software version
 //   confidence.pfm  when the method gives one: float confidence in [0, 1]
 //   brdf_*.pfm      when the method fits a per-pixel reflectance: one float map per
@@ -39,7 +41,7 @@ double albedo_png_scale(const SolveResult& result);
 struct SolveFolder {
   std::filesystem::path dir;
   nlohmann::json summary = nlohmann::json::object();  // summary.json ({} when there is none)
-  cv::Mat normals;                                     // CV_32FC3, zero where not solved
+  cv::Mat normals;                                     // CV_32FC3 (normal.exr, else normal.png), zero where not solved
   cv::Mat solved;                                      // CV_8UC1, 255 where normal.png holds a normal
   // CV_32FC1, the solver's albedo: albedo.pfm, else albedo.png times the
   // albedo_png_scale of summary.json; empty when the folder has neither.
