@@ -114,11 +114,10 @@ SolveResult solve_auto(const Observations& observations, const AutoOptions& opti
                         {"terms", bipolynomial_term_names(bipolynomial.order)},
                         {"x", "n.h"},
                         {"y", "l.h"}};
-  const SolveSummary& s = result.summary;
-  result.summary.message = fmt::format(
-      "auto ({} + monotonic): solved {} of {} pixels in {:.2f} s ({} too few observations, {} degenerate)",
-      bipolynomial_name(bipolynomial.order), s.pixels_solved, s.pixels_in_mask, s.seconds,
-      s.pixels_rejected_too_few_observations, s.pixels_rejected_degenerate);
+  SolveSummary& s = result.summary;
+  const std::string model = bipolynomial_name(bipolynomial.order);
+  s.settings = {{"models", {model, "monotonic"}, model + " + monotonic"}};
+  s.message = s.format_message();
   return result;
 }
 

@@ -235,13 +235,13 @@ SolveResult solve_bipolynomial(const Observations& observations, const BiPolynom
                         {"terms", bipolynomial_term_names(options.order)},
                         {"x", "n.h"},
                         {"y", "l.h"}};
-  const SolveSummary& s = result.summary;
-  result.summary.message = fmt::format(
-      "{} (T_low {:.0f}%, fall-off {:.3f}{}): solved {} of {} pixels in {:.2f} s, {:.1f} iterations on "
-      "average ({} too few observations, {} degenerate)",
-      s.method, 100 * options.t_low, options.falloff.value_or(0.0), estimate ? " estimated" : "",
-      s.pixels_solved, s.pixels_in_mask, s.seconds, iterations, s.pixels_rejected_too_few_observations,
-      s.pixels_rejected_degenerate);
+  SolveSummary& s = result.summary;
+  const double falloff = options.falloff.value_or(0.0);
+  s.settings = {{"t_low", options.t_low, fmt::format("T_low {:.0f}%", 100 * options.t_low)},
+                {"falloff", falloff, fmt::format("fall-off {:.3f}{}", falloff, estimate ? " estimated" : "")},
+                {"falloff_estimated", estimate.has_value(), ""}};
+  s.findings = {{"mean_iterations", iterations, fmt::format("{:.1f} iterations on average", iterations)}};
+  s.message = s.format_message();
   return result;
 }
 

@@ -234,13 +234,10 @@ SolveResult solve_lambertian(const Observations& observations, const L2Options& 
   summary.pixels_rejected_too_few_observations = counters.too_few;
   summary.pixels_rejected_degenerate = counters.degenerate;
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  summary.message =
-      fmt::format("l2 ({}): solved {} of {} pixels ({} too few observations, {} degenerate)",
-                  all                 ? "all observations, one pseudo-inverse"
-                  : observations.near ? "per-pixel near lights"
-                                      : "per-pixel selection",
-                  summary.pixels_solved, summary.pixels_in_mask, summary.pixels_rejected_too_few_observations,
-                  summary.pixels_rejected_degenerate);
+  summary.settings = {all                 ? SolveFact{"mode", "all", "all observations, one pseudo-inverse"}
+                      : observations.near ? SolveFact{"mode", "near", "per-pixel near lights"}
+                                          : SolveFact{"mode", "selected", "per-pixel selection"}};
+  summary.message = summary.format_message();
   return result;
 }
 

@@ -362,12 +362,10 @@ SolveResult solve_monotonic(const Observations& observations, const MonotonicOpt
       result);
   result.parameters = options.to_json();
   result.parameters["azimuth"] = azimuth_normals.empty() ? "isotropy" : "normals";
-  const SolveSummary& s = result.summary;
-  result.summary.message = fmt::format(
-      "monotonic (azimuth from {}): solved {} of {} pixels in {:.2f} s ({} too few observations, {} "
-      "degenerate)",
-      azimuth_normals.empty() ? "isotropy" : "normals", s.pixels_solved, s.pixels_in_mask, s.seconds,
-      s.pixels_rejected_too_few_observations, s.pixels_rejected_degenerate);
+  SolveSummary& s = result.summary;
+  const std::string azimuth = azimuth_normals.empty() ? "isotropy" : "normals";
+  s.settings = {{"azimuth", azimuth, "azimuth from " + azimuth}};
+  s.message = s.format_message();
   return result;
 }
 

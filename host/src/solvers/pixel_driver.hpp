@@ -79,7 +79,8 @@ void check_threads(const char* owner, int threads);                       // 0 (
 // Runs `make_core()` once per worker and the core once per pixel. Fills every
 // map of the result (normals, albedo, residual, solved, confidence and, when
 // asked, coefficients) and the summary counts; the caller adds parameters,
-// reflectance and the message. Returns the mean iterations over solved pixels.
+// reflectance, the summary's settings and findings, and its message. Returns
+// the mean iterations over solved pixels.
 double run_per_pixel(const Observations& observations, const DriverSettings& settings,
                      const std::function<PixelCore()>& make_core, SolveResult& result);
 

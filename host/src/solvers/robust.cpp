@@ -205,12 +205,11 @@ SolveResult solve_robust(const Observations& observations, const RobustOptions& 
       },
       result);
   result.parameters = options.to_json();
-  const SolveSummary& s = result.summary;
-  result.summary.message = fmt::format(
-      "robust ({}, T_low {:.0f}%): solved {} of {} pixels in {:.2f} s ({} too few observations, {} "
-      "degenerate)",
-      robust_estimator_name(options.estimator), 100 * options.t_low, s.pixels_solved, s.pixels_in_mask,
-      s.seconds, s.pixels_rejected_too_few_observations, s.pixels_rejected_degenerate);
+  SolveSummary& s = result.summary;
+  const std::string estimator = robust_estimator_name(options.estimator);
+  s.settings = {{"estimator", estimator, estimator},
+                {"t_low", options.t_low, fmt::format("T_low {:.0f}%", 100 * options.t_low)}};
+  s.message = s.format_message();
   return result;
 }
 

@@ -234,10 +234,12 @@ SolveResult solve_shape_prior(const Observations& obs, const cv::Mat& prior_norm
   s.pixels_solved = solved;
   s.pixels_rejected_degenerate = degenerate;
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  s.message = fmt::format(
-      "shape-prior (k = {}): {} of {} pixels solved in {:.2f} s; prior fit cost {:.4g} (linear) -> {:.4g} "
-      "(refined, {} evaluations)",
-      k, solved, p, s.seconds, initial_cost, final_cost, evaluations);
+  s.settings = {{"k", k, fmt::format("k = {}", k)}};
+  s.findings = {{"prior_fit_cost",
+                 {{"linear", initial_cost}, {"refined", final_cost}, {"evaluations", evaluations}},
+                 fmt::format("prior fit cost {:.4g} (linear) -> {:.4g} (refined, {} evaluations)",
+                             initial_cost, final_cost, evaluations)}};
+  s.message = s.format_message();
   return result;
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 // What every photometric-stereo solver returns: per-pixel maps plus a summary
-// of what was solved, what was rejected and why.
+// of what was solved, what was rejected and why, and whether the result is
+// usable at all.
 
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
@@ -8,6 +9,7 @@
 #include <cstddef>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace lightstage {
 
@@ -17,15 +19,43 @@ namespace lightstage {
 // Empty = no report.
 using SolveProgress = std::function<void(std::size_t items)>;
 
+// One method-specific fact of a solve (a setting it ran with, or something it
+// found beyond the pixel counts). `key` and `value` go to summary.json's
+// "facts"; `text` is how the message shows it ("T_low 50%"); an empty text
+// keeps the fact out of the message.
+struct SolveFact {
+  std::string key;
+  nlohmann::json value;
+  std::string text;
+};
+
 struct SolveSummary {
+  // A solve that gives normals to fewer than this fraction of the mask's
+  // pixels is not usable: its maps are holes with a few scattered normals,
+  // whatever the cause (dark stack, wrong mask, lights that do not fit the data).
+  static constexpr double kMinUsableFraction = 0.01;
+
   std::string method;              // e.g. "l2"
   std::size_t pixels_in_mask = 0;  // pixels the solver was given
   std::size_t pixels_solved = 0;   // pixels with a normal
   std::size_t pixels_rejected_too_few_observations = 0;
   std::size_t pixels_rejected_degenerate = 0;  // near-coplanar lights or zero solution
   double seconds = 0;                          // wall time of the solve
-  std::string message;                         // one human-readable line
+  std::vector<SolveFact> settings;             // how the method ran: "(T_low 50%, ...)" after its name
+  std::vector<SolveFact> findings;             // what else it found: after the pixel counts
+  // format_message() when the solver finished, for callers that log it.
+  std::string message;
 
+  // The one human-readable line: method, settings, counts, seconds, findings,
+  // rejections and, when not usable, why.
+  std::string format_message() const;
+  // Why the result is not usable, empty when it is: the mask was empty, no
+  // pixel was solved (every pixel degenerate = the lights are degenerate;
+  // every pixel short of observations), or under kMinUsableFraction solved.
+  std::string unusable_reason() const;
+  bool usable() const { return unusable_reason().empty(); }
+  // Counts, seconds, message, "usable", "unusable_reason" (only when not
+  // usable) and "facts" (settings and findings by key).
   nlohmann::json to_json() const;
 };
 
