@@ -134,8 +134,8 @@ BiPolynomialPixelFit fit_bipolynomial_pixel(const PixelObservations& pixel,
   Eigen::Vector3d n = s.normalized();
   const double kappa = options.falloff.value_or(0.0);
   if (kappa != 0 && ws.kept.size() >= kMinFalloffObservations) {
-    // Not per pixel by residual: on the ball that kept the biased start
-    // wherever Lambert fit its T_low set better (1.49° against 1.23°).
+    // Not per pixel by residual: on the DiLiGenT ball that kept the biased
+    // start wherever Lambert fit its T_low set better (docs/solvers.md).
     if (const auto start = fit_falloff_pixel(pixel, ws.kept, n, kappa)) n = start->normal;
   }
 
