@@ -1,12 +1,15 @@
 #pragma once
 // manifest.json of a stack folder: building it when writing, applying it to
-// loaded frames when reading. The keys are documented in docs/stack-format.md.
+// loaded frames when reading, and reading a capture's plan and progress back
+// for --resume. The keys are documented in docs/stack-format.md and
+// docs/capture.md; every manifest is parsed here and nowhere else.
 
 #include "lightstage/common/image_stack.hpp"
 
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -33,5 +36,38 @@ nlohmann::json build_manifest(const ImageStack& stack, const StackFiles& files, 
 // and the field for bad JSON, a wrong format or version, a frame count or
 // file name that disagrees with filenames.txt, or a value of the wrong type.
 void apply_manifest(const std::filesystem::path& path, ImageStack& stack);
+
+// The "capture" section a capture keeps in its manifest (docs/capture.md).
+inline constexpr int kCaptureFormatVersion = 1;
+
+struct CaptureDark {
+  double exposure_us = 0;
+  std::string file;  // in the stack folder
+  double mean = 0;
+};
+
+// A frame as the manifest lists it (no image, no dark image), and the entry's
+// keys that are not Frame fields (frame stamps, bracket details).
+struct ManifestFrame {
+  Frame frame;
+  nlohmann::json extra = nlohmann::json::object();
+};
+
+// What a capture's manifest says it planned and took.
+struct CaptureManifest {
+  std::vector<int> plan_led_ids;
+  std::vector<std::size_t> done;      // the plan index of each listed frame, in the order of `frames`
+  std::map<int, double> exposure_us;  // per LED id
+  std::vector<double> bracket_stops;
+  std::map<int, std::vector<double>> bracket_exposure_us;  // per LED id
+  std::vector<CaptureDark> darks;
+  std::vector<ManifestFrame> frames;
+};
+
+// Reads a capture's manifest.json: the format and version checks of
+// apply_manifest, the capture section (version kCaptureFormatVersion) and the
+// listed frames. Every file it names (frames, darks) must be inside the stack
+// folder. Throws InputError naming the file and field.
+CaptureManifest read_capture_manifest(const std::filesystem::path& path);
 
 }  // namespace lightstage::io

@@ -12,47 +12,24 @@
 // several exposures (one controller sequence per exposure) and the frames are
 // merged into one float frame per LED (hdr_merge.hpp). Dropped frames are
 // retaken; duplicates are dropped.
+//
+// This composes three parts: the plan (capture_plan.hpp: what to take), the
+// runner (capture_runner.hpp: controller and camera through the plan) and the
+// stack writer (stack_writer.hpp: the folder, incrementally, and resume).
 
 #include "lightstage/common/camera.hpp"
 #include "lightstage/common/rig.hpp"
+#include "lightstage/host/capture/capture_options.hpp"
 #include "lightstage/host/controller/controller_client.hpp"
-#include "lightstage/host/progress.hpp"
 
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
 
-#include <cstdint>
-#include <filesystem>
-#include <optional>
+#include <cstddef>
 #include <string>
 #include <vector>
 
 namespace lightstage {
-
-struct CaptureOptions {
-  std::filesystem::path out;
-  bool resume = false;
-  std::optional<double> exposure_us;  // fixed exposure; unset = automatic per LED
-  double auto_start_us = 0;           // automatic: the preview exposure; 0 = the rig camera's
-  double auto_target = 0.7;           // automatic: where the brightest pixels should sit, share of full scale
-  double auto_percentile = 0.999;     // automatic: which pixels count as "the brightest"
-  std::optional<double> gain;         // unset = the camera's current gain
-  int dark_frames = 4;                // per exposure; 0 = no darks (black level 0)
-  int max_retakes = 3;                // per step, for dropped frames
-  std::string loop = "auto";          // open | closed | auto (closed when the rig has a strobe)
-  std::uint32_t settle_us = 500;
-  std::uint32_t gap_us = 500;
-  std::vector<int> led_ids;  // empty = every LED of the rig, in rig order
-  // HDR: stops relative to each LED's exposure (fixed or automatic), e.g.
-  // {0, -3, -6}; every LED is taken at each and the frames merged into one
-  // PFM frame in full scale per exposure-second. Empty = one exposure per LED.
-  std::vector<double> bracket_stops;
-  // The camera's inverse response (response_curve.hpp) for cameras that are
-  // not linear: frames and darks are linearised and written as float PFM.
-  std::filesystem::path response;
-  OutputMode mode = OutputMode::kHuman;
-
-  void check() const;  // throws InputError naming the option
-};
 
 struct CaptureReport {
   std::size_t frames = 0;      // frames in the stack
@@ -67,6 +44,9 @@ struct CaptureReport {
   nlohmann::json to_json() const;
 };
 
+// Throws InputError for bad options or a folder it must not touch, Error
+// (saying the frames taken so far are kept, and to --resume) when the
+// controller, the camera or the link fails.
 CaptureReport capture_stack(const Rig& rig, ControllerClient& controller, camera::Camera& cam,
                             const CaptureOptions& options);
 

@@ -1,0 +1,41 @@
+#pragma once
+// What `lightstage capture` is asked to do: shared by the planner, the runner
+// and the stack writer of a capture (capture_session.hpp composes them).
+
+#include "lightstage/host/progress.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace lightstage {
+
+struct CaptureOptions {
+  std::filesystem::path out;
+  bool resume = false;
+  std::optional<double> exposure_us;  // fixed exposure; unset = automatic per LED
+  double auto_start_us = 0;           // automatic: the preview exposure; 0 = the rig camera's
+  double auto_target = 0.7;           // automatic: where the brightest pixels should sit, share of full scale
+  double auto_percentile = 0.999;     // automatic: which pixels count as "the brightest"
+  std::optional<double> gain;         // unset = the camera's current gain
+  int dark_frames = 4;                // per exposure; 0 = no darks (black level 0)
+  int max_retakes = 3;                // per step, for dropped frames
+  std::string loop = "auto";          // open | closed | auto (closed when the rig has a strobe)
+  std::uint32_t settle_us = 500;
+  std::uint32_t gap_us = 500;
+  std::vector<int> led_ids;  // empty = every LED of the rig, in rig order
+  // HDR: stops relative to each LED's exposure (fixed or automatic), e.g.
+  // {0, -3, -6}; every LED is taken at each and the frames merged into one
+  // PFM frame in full scale per exposure-second. Empty = one exposure per LED.
+  std::vector<double> bracket_stops;
+  // The camera's inverse response (response_curve.hpp) for cameras that are
+  // not linear: frames and darks are linearised and written as float PFM.
+  std::filesystem::path response;
+  OutputMode mode = OutputMode::kHuman;
+
+  void check() const;  // throws InputError naming the option
+};
+
+}  // namespace lightstage

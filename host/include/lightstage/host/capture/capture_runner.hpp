@@ -1,0 +1,102 @@
+#pragma once
+// Drives the controller and the camera through a capture plan. A batch is a
+// list of shots at one exposure: with a hardware trigger one controller
+// sequence, the frames read while it runs and matched to its steps by trigger
+// time (frame_matcher.hpp); without, LED by LED with a software trigger.
+// Dropped frames are retaken, frames matched to no step dropped as duplicates.
+
+#include "lightstage/common/camera.hpp"
+#include "lightstage/host/capture/capture_options.hpp"
+#include "lightstage/host/capture/capture_plan.hpp"
+#include "lightstage/host/controller/controller_client.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <vector>
+
+namespace lightstage {
+
+// One image the capture needs: an LED (or none, for a dark frame) at an exposure.
+struct Shot {
+  int led_id = -1;  // -1: dark
+  double exposure_us = 0;
+};
+
+struct Taken {
+  camera::Frame frame;
+  proto::StepEvent step;  // the controller's record of the step; empty with a software trigger
+};
+
+// Frames of one batch, keyed by the index of the shot in the batch.
+struct Batch {
+  std::map<std::size_t, Taken> taken;
+  std::size_t duplicates = 0;
+  std::size_t retakes = 0;
+  double camera_wait_seconds = 0;
+};
+
+// One camera frame of a planned frame: at the plan's exposure `exposure` (an index into exposures_us).
+struct Take {
+  std::size_t exposure = 0;
+  Taken taken;
+};
+
+// Batches of the plan's frames (take_frames), added up.
+struct RunStats {
+  std::size_t retakes = 0;     // shots run again after a dropped frame
+  std::size_t duplicates = 0;  // frames matched to no step
+  double camera_wait_seconds = 0;
+};
+
+class CaptureRunner {
+ public:
+  // Closed loop with --loop closed, or auto and a strobe input on the rig;
+  // throws InputError for closed without one. Hardware trigger when the camera has one.
+  CaptureRunner(ControllerClient& controller, camera::Camera& cam, const CaptureOptions& options);
+
+  // Configures the camera for the trigger, sets the options' gain and starts streaming.
+  void start();
+  void stop() { cam_.stop(); }
+
+  bool closed_loop() const { return closed_loop_; }
+  bool hardware_trigger() const { return hardware_; }
+  double gain() const { return gain_; }  // in force after start()
+  // Shots per controller sequence: short, so an interruption loses little.
+  std::size_t steps_per_sequence() const;
+
+  // The shots (all at one exposure) with dropped ones retaken up to
+  // max_retakes times; throws Error naming the camera and LED when a shot
+  // still has no frame.
+  Batch run_batch(const std::vector<Shot>& shots);
+
+  // Called with a planned frame's takes once all are in (shortest exposure first).
+  using FrameSink = std::function<void(std::size_t frame, std::vector<Take>& takes)>;
+  // Takes every frame of `plan` not `done` (by frame index). Without a
+  // bracket: one batch per exposure (ascending), LEDs in plan order, cut into
+  // sequences; each frame is handed on as its batch ends. With a bracket:
+  // LEDs grouped by base exposure and cut into sequences; each group is taken
+  // at each of its bracket exposures (one batch each, shortest first), then
+  // handed on frame by frame. Adds to stats().
+  void take_frames(const CapturePlan& plan, const std::vector<bool>& done, const FrameSink& on_frame);
+  const RunStats& stats() const { return stats_; }
+
+ private:
+  void set_exposure(double exposure_us);
+  Batch run_batch_once(const std::vector<Shot>& shots);
+  Batch run_software_batch(const std::vector<Shot>& shots);
+  Batch run_counted(const std::vector<Shot>& shots);
+
+  ControllerClient& controller_;
+  camera::Camera& cam_;
+  CaptureOptions options_;
+  bool closed_loop_ = false;
+  bool hardware_ = false;
+  double gain_ = 1;
+  double current_exposure_us_ = 0;
+  std::uint32_t next_sequence_id_ = 1;
+  RunStats stats_;
+};
+
+}  // namespace lightstage

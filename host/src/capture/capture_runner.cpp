@@ -1,0 +1,275 @@
+#include "lightstage/host/capture/capture_runner.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/common/log.hpp"
+#include "lightstage/host/capture/frame_matcher.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <mutex>
+#include <set>
+#include <thread>
+
+namespace lightstage {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+std::string led_name(int id) { return id < 0 ? std::string("dark") : fmt::format("LED {}", id); }
+
+}  // namespace
+
+CaptureRunner::CaptureRunner(ControllerClient& controller, camera::Camera& cam, const CaptureOptions& options)
+    : controller_(controller), cam_(cam), options_(options) {
+  const bool strobe = controller_.info().capabilities().strobe_input();
+  if (options_.loop == "closed" && !strobe) fail("--loop closed: the controller's rig has no strobe input");
+  closed_loop_ = options_.loop == "closed" || (options_.loop == "auto" && strobe);
+  hardware_ = std::ranges::count(cam_.trigger_modes(), camera::TriggerMode::Hardware) > 0;
+}
+
+void CaptureRunner::start() {
+  camera::CameraConfig config = cam_.default_config();
+  config.trigger = hardware_ ? camera::TriggerMode::Hardware : camera::TriggerMode::Software;
+  const camera::Validation v = cam_.validate(config);
+  if (v.status == camera::ConfigStatus::Invalid) {
+    fail("{}: cannot configure for capture: {}", cam_.uri(), v.message());
+  }
+  cam_.configure(config);
+  const camera::Controls now = cam_.set_controls({std::nullopt, options_.gain});
+  gain_ = now.analogue_gain.value_or(1.0);
+  cam_.start();
+}
+
+std::size_t CaptureRunner::steps_per_sequence() const {
+  constexpr std::size_t kFramesPerSequence = 12;
+  return std::clamp<std::size_t>(controller_.info().capabilities().max_sequence_steps(), 1,
+                                 kFramesPerSequence);
+}
+
+void CaptureRunner::set_exposure(double exposure_us) {
+  if (exposure_us == current_exposure_us_) return;
+  const camera::Controls now = cam_.set_controls({exposure_us, std::nullopt});
+  current_exposure_us_ = now.exposure_us.value_or(exposure_us);
+  // Cameras that cannot say which frame a change reached (V4L2) need a few
+  // frames to settle: take them dark and throw them away.
+  const int latency = cam_.control_info().latency_frames;
+  if (latency > 0 && hardware_)
+    run_batch_once(std::vector<Shot>(static_cast<std::size_t>(latency), Shot{-1, exposure_us}));
+}
+
+Batch CaptureRunner::run_batch(const std::vector<Shot>& shots) {
+  if (shots.empty()) return {};
+  set_exposure(shots.front().exposure_us);
+  Batch batch = hardware_ ? run_batch_once(shots) : run_software_batch(shots);
+  for (int attempt = 0; attempt < options_.max_retakes && batch.taken.size() < shots.size(); ++attempt) {
+    std::vector<std::size_t> missing;
+    for (std::size_t i = 0; i < shots.size(); ++i) {
+      if (!batch.taken.count(i)) missing.push_back(i);
+    }
+    logger("capture")->warn("{} frame(s) dropped ({}...): retaking", missing.size(),
+                            led_name(shots[missing[0]].led_id));
+    std::vector<Shot> again;
+    for (const std::size_t i : missing) again.push_back(shots[i]);
+    Batch retake = hardware_ ? run_batch_once(again) : run_software_batch(again);
+    batch.retakes += again.size();
+    batch.duplicates += retake.duplicates;
+    batch.camera_wait_seconds += retake.camera_wait_seconds;
+    for (auto& [j, taken] : retake.taken) batch.taken[missing[j]] = std::move(taken);
+  }
+  for (std::size_t i = 0; i < shots.size(); ++i) {
+    if (!batch.taken.count(i)) {
+      throw Error(fmt::format("{}: no frame for {} after {} retakes", cam_.uri(), led_name(shots[i].led_id),
+                              options_.max_retakes));
+    }
+  }
+  return batch;
+}
+
+// One controller sequence with the camera on hardware trigger, frames read on
+// a thread of their own while the sequence runs, then matched by trigger time.
+Batch CaptureRunner::run_batch_once(const std::vector<Shot>& shots) {
+  const double exposure_us = shots.front().exposure_us;
+  proto::Sequence sequence;
+  sequence.set_id(next_sequence_id_++);
+  for (std::size_t i = 0; i < shots.size(); ++i) {
+    proto::Step* step = sequence.add_steps();
+    if (shots[i].led_id >= 0) {
+      auto* led = step->add_leds();
+      led->set_led_id(static_cast<std::uint32_t>(shots[i].led_id));
+      led->set_level(1.0f);
+    }
+    step->set_settle_us(options_.settle_us);
+    step->set_trigger(true);
+    // Open loop: lit a little longer than the exposure, for the camera's trigger latency.
+    step->set_exposure_us(static_cast<std::uint32_t>(std::ceil(exposure_us * 1.05 + 300)));
+    step->set_wait_strobe(closed_loop_);
+    step->set_strobe_timeout_us(static_cast<std::uint32_t>(std::min(4e9, 2 * exposure_us + 200'000)));
+    step->set_gap_us(options_.gap_us);
+    step->set_tag(static_cast<std::uint32_t>(i));
+  }
+  std::vector<camera::Frame> frames;
+  std::mutex frames_mutex;
+  std::atomic<bool> sequence_done{false};
+  std::exception_ptr camera_error;
+  const auto wait_limit = std::chrono::milliseconds(static_cast<int>(1000 + 3 * exposure_us / 1000));
+  std::thread reader([&] {
+    // A camera may deliver well after the sequence (slow readout, a busy
+    // link): while frames keep coming it is late, not dropping them, so the
+    // wait counts from the later of the sequence's end and the last frame.
+    Clock::time_point quiet_since{};
+    try {
+      for (;;) {
+        if (auto frame = cam_.wait_frame(std::chrono::milliseconds(20))) {
+          const std::lock_guard lock(frames_mutex);
+          frames.push_back(std::move(*frame));
+          if (sequence_done) quiet_since = Clock::now();
+        }
+        if (!sequence_done) continue;
+        if (quiet_since == Clock::time_point{}) quiet_since = Clock::now();
+        const std::lock_guard lock(frames_mutex);
+        if (frames.size() >= shots.size() || Clock::now() - quiet_since > wait_limit) return;
+      }
+    } catch (...) {
+      camera_error = std::current_exception();
+    }
+  });
+  SequenceRun run;
+  try {
+    run = controller_.run_sequence(sequence);
+  } catch (...) {
+    sequence_done = true;
+    reader.join();
+    throw;
+  }
+  sequence_done = true;
+  const Clock::time_point controller_done = Clock::now();
+  reader.join();
+  Batch batch;
+  batch.camera_wait_seconds = seconds_since(controller_done);
+  if (camera_error) std::rethrow_exception(camera_error);
+  if (!run.ok()) {
+    throw Error(fmt::format("controller: sequence {} ended {}: {}", sequence.id(),
+                            proto::Outcome_Name(run.done.outcome()), run.done.detail()));
+  }
+  std::vector<StepTiming> steps;
+  for (const auto& e : run.steps) steps.push_back({e.trigger_ns(), exposure_us});
+  std::vector<FrameTiming> timings;
+  for (const auto& f : frames) {
+    const std::int64_t t =
+        f.clock == camera::ClockDomain::Unknown
+            ? f.timestamp_ns
+            : camera::convert_timestamp_ns(f.timestamp_ns, f.clock, camera::ClockDomain::Monotonic);
+    timings.push_back({t, f.timestamp_point, f.sequence});
+  }
+  const FrameMatch match = match_frames(steps, timings);
+  batch.duplicates = match.unmatched_frames.size();
+  for (std::size_t k = 0; k < run.steps.size(); ++k) {
+    if (!match.frame_of_step[k]) continue;
+    const std::size_t shot = run.steps[k].tag();
+    batch.taken[shot] = Taken{std::move(frames[*match.frame_of_step[k]]), run.steps[k]};
+  }
+  return batch;
+}
+
+// Cameras without a hardware trigger input: light the LED, trigger by software, wait.
+Batch CaptureRunner::run_software_batch(const std::vector<Shot>& shots) {
+  Batch batch;
+  const auto timeout =
+      std::chrono::milliseconds(static_cast<int>(2000 + 3 * shots.front().exposure_us / 1000));
+  for (std::size_t i = 0; i < shots.size(); ++i) {
+    std::vector<std::pair<std::uint32_t, float>> leds;
+    if (shots[i].led_id >= 0) leds.emplace_back(static_cast<std::uint32_t>(shots[i].led_id), 1.0f);
+    controller_.set_leds(leds);
+    const Clock::time_point asked = Clock::now();
+    std::optional<camera::Frame> frame;
+    try {
+      cam_.trigger();
+      frame = cam_.wait_frame(timeout);
+    } catch (...) {
+      // A camera error must not leave the LED lit until the watchdog notices.
+      try {
+        controller_.all_off();
+      } catch (...) {
+      }
+      throw;
+    }
+    batch.camera_wait_seconds += seconds_since(asked);
+    controller_.all_off();
+    if (frame) batch.taken[i] = Taken{std::move(*frame), {}};
+  }
+  return batch;
+}
+
+Batch CaptureRunner::run_counted(const std::vector<Shot>& shots) {
+  Batch batch = run_batch(shots);
+  stats_.retakes += batch.retakes;
+  stats_.duplicates += batch.duplicates;
+  stats_.camera_wait_seconds += batch.camera_wait_seconds;
+  return batch;
+}
+
+void CaptureRunner::take_frames(const CapturePlan& plan, const std::vector<bool>& done,
+                                const FrameSink& on_frame) {
+  const std::size_t max_steps = steps_per_sequence();
+  const auto is_done = [&](std::size_t i) { return i < done.size() && done[i]; };
+  if (!plan.hdr()) {
+    for (std::size_t exposure = 0; exposure < plan.exposures_us.size(); ++exposure) {
+      std::vector<Shot> shots;
+      std::vector<std::size_t> frame_of;
+      for (std::size_t i = 0; i < plan.frames.size(); ++i) {
+        if (plan.frames[i].exposure == exposure && !is_done(i)) {
+          shots.push_back({plan.frames[i].led_id, plan.exposures_us[exposure]});
+          frame_of.push_back(i);
+        }
+      }
+      for (std::size_t begin = 0; begin < shots.size(); begin += max_steps) {
+        const std::size_t end = std::min(shots.size(), begin + max_steps);
+        const std::vector<Shot> part(shots.begin() + static_cast<std::ptrdiff_t>(begin),
+                                     shots.begin() + static_cast<std::ptrdiff_t>(end));
+        Batch batch = run_counted(part);
+        for (auto& [k, taken] : batch.taken) {
+          std::vector<Take> takes{Take{exposure, std::move(taken)}};
+          on_frame(frame_of[begin + k], takes);
+        }
+      }
+    }
+    return;
+  }
+  // An interruption loses at most one group's brackets; finished LEDs are kept.
+  std::vector<std::vector<std::size_t>> by_exposure(plan.exposures_us.size());
+  for (std::size_t i = 0; i < plan.frames.size(); ++i) {
+    if (!is_done(i)) by_exposure[plan.frames[i].exposure].push_back(i);
+  }
+  for (const std::vector<std::size_t>& indices : by_exposure) {
+    for (std::size_t begin = 0; begin < indices.size(); begin += max_steps) {
+      const std::vector<std::size_t> group(
+          indices.begin() + static_cast<std::ptrdiff_t>(begin),
+          indices.begin() + static_cast<std::ptrdiff_t>(std::min(indices.size(), begin + max_steps)));
+      std::set<std::size_t> exposures;
+      for (const std::size_t i : group)
+        exposures.insert(plan.frames[i].bracket.begin(), plan.frames[i].bracket.end());
+      std::map<std::size_t, std::vector<Take>> takes_of;  // by frame index
+      for (const std::size_t exposure : exposures) {
+        std::vector<Shot> shots;
+        std::vector<std::size_t> owner;
+        for (const std::size_t i : group) {
+          if (std::ranges::count(plan.frames[i].bracket, exposure) == 0) continue;
+          shots.push_back({plan.frames[i].led_id, plan.exposures_us[exposure]});
+          owner.push_back(i);
+        }
+        Batch batch = run_counted(shots);
+        for (auto& [k, taken] : batch.taken) takes_of[owner[k]].push_back(Take{exposure, std::move(taken)});
+      }
+      for (const std::size_t i : group) on_frame(i, takes_of.at(i));
+    }
+  }
+}
+
+}  // namespace lightstage
