@@ -12,17 +12,17 @@ namespace lightstage::camera {
 
 std::string_view to_string(CameraError::Kind kind) {
   switch (kind) {
-    case CameraError::Kind::Failed:
+    case CameraError::Kind::kFailed:
       return "failed";
-    case CameraError::Kind::Timeout:
+    case CameraError::Kind::kTimeout:
       return "timeout";
-    case CameraError::Kind::Disconnected:
+    case CameraError::Kind::kDisconnected:
       return "disconnected";
-    case CameraError::Kind::Busy:
+    case CameraError::Kind::kBusy:
       return "busy";
-    case CameraError::Kind::NotFound:
+    case CameraError::Kind::kNotFound:
       return "not found";
-    case CameraError::Kind::Unsupported:
+    case CameraError::Kind::kUnsupported:
       return "unsupported";
   }
   return "?";
@@ -30,13 +30,13 @@ std::string_view to_string(CameraError::Kind kind) {
 
 std::string_view to_string(ClockDomain domain) {
   switch (domain) {
-    case ClockDomain::Monotonic:
+    case ClockDomain::kMonotonic:
       return "CLOCK_MONOTONIC";
-    case ClockDomain::Boottime:
+    case ClockDomain::kBoottime:
       return "CLOCK_BOOTTIME";
-    case ClockDomain::Realtime:
+    case ClockDomain::kRealtime:
       return "CLOCK_REALTIME";
-    case ClockDomain::Unknown:
+    case ClockDomain::kUnknown:
       return "unknown clock";
   }
   return "?";
@@ -44,15 +44,15 @@ std::string_view to_string(ClockDomain domain) {
 
 std::string_view to_string(Cfa cfa) {
   switch (cfa) {
-    case Cfa::None:
+    case Cfa::kNone:
       return "none";
-    case Cfa::RGGB:
+    case Cfa::kRGGB:
       return "RGGB";
-    case Cfa::BGGR:
+    case Cfa::kBGGR:
       return "BGGR";
-    case Cfa::GRBG:
+    case Cfa::kGRBG:
       return "GRBG";
-    case Cfa::GBRG:
+    case Cfa::kGBRG:
       return "GBRG";
   }
   return "?";
@@ -60,11 +60,11 @@ std::string_view to_string(Cfa cfa) {
 
 std::string_view to_string(TriggerMode mode) {
   switch (mode) {
-    case TriggerMode::FreeRun:
+    case TriggerMode::kFreeRun:
       return "free-run";
-    case TriggerMode::Software:
+    case TriggerMode::kSoftware:
       return "software";
-    case TriggerMode::Hardware:
+    case TriggerMode::kHardware:
       return "hardware";
   }
   return "?";
@@ -72,11 +72,11 @@ std::string_view to_string(TriggerMode mode) {
 
 std::string_view to_string(ConfigStatus status) {
   switch (status) {
-    case ConfigStatus::Valid:
+    case ConfigStatus::kValid:
       return "valid";
-    case ConfigStatus::Adjusted:
+    case ConfigStatus::kAdjusted:
       return "adjusted";
-    case ConfigStatus::Invalid:
+    case ConfigStatus::kInvalid:
       return "invalid";
   }
   return "?";
@@ -84,11 +84,11 @@ std::string_view to_string(ConfigStatus status) {
 
 std::string_view to_string(TimestampPoint point) {
   switch (point) {
-    case TimestampPoint::StartOfExposure:
+    case TimestampPoint::kStartOfExposure:
       return "start of exposure";
-    case TimestampPoint::EndOfFrame:
+    case TimestampPoint::kEndOfFrame:
       return "end of frame";
-    case TimestampPoint::Unknown:
+    case TimestampPoint::kUnknown:
       return "unknown";
   }
   return "?";
@@ -100,16 +100,16 @@ namespace {
 
 clockid_t clock_id(ClockDomain domain) {
   switch (domain) {
-    case ClockDomain::Monotonic:
+    case ClockDomain::kMonotonic:
       return CLOCK_MONOTONIC;
-    case ClockDomain::Boottime:
+    case ClockDomain::kBoottime:
       return CLOCK_BOOTTIME;
-    case ClockDomain::Realtime:
+    case ClockDomain::kRealtime:
       return CLOCK_REALTIME;
-    case ClockDomain::Unknown:
+    case ClockDomain::kUnknown:
       break;
   }
-  throw CameraError(CameraError::Kind::Unsupported,
+  throw CameraError(CameraError::Kind::kUnsupported,
                     "cannot read the clock of a timestamp whose clock is unknown");
 }
 
@@ -151,14 +151,14 @@ std::int64_t convert_timestamp_ns(std::int64_t t_ns, ClockDomain from, ClockDoma
 // --- formats and frames ---------------------------------------------------------
 
 Cfa cfa_at(Cfa cfa, int x, int y) {
-  if (cfa == Cfa::None) return cfa;
+  if (cfa == Cfa::kNone) return cfa;
   // The 2x2 pattern as [row][col] letters; the crop's top-left is at (y&1, x&1).
   const std::string_view name = to_string(cfa);
   const char grid[2][2] = {{name[0], name[1]}, {name[2], name[3]}};
   const int r = y & 1;
   const int c = x & 1;
   const std::string shifted{grid[r][c], grid[r][c ^ 1], grid[r ^ 1][c], grid[r ^ 1][c ^ 1]};
-  for (Cfa candidate : {Cfa::RGGB, Cfa::BGGR, Cfa::GRBG, Cfa::GBRG}) {
+  for (Cfa candidate : {Cfa::kRGGB, Cfa::kBGGR, Cfa::kGRBG, Cfa::kGBRG}) {
     if (to_string(candidate) == shifted) return candidate;
   }
   return cfa;  // unreachable: every shift of a Bayer pattern is a Bayer pattern
@@ -167,7 +167,7 @@ Cfa cfa_at(Cfa cfa, int x, int y) {
 void crop_frame(Frame& frame, const Roi& roi, const std::string& uri) {
   if (roi.x < 0 || roi.y < 0 || roi.width <= 0 || roi.height <= 0 || roi.x + roi.width > frame.image.cols ||
       roi.y + roi.height > frame.image.rows) {
-    throw CameraError(CameraError::Kind::Failed,
+    throw CameraError(CameraError::Kind::kFailed,
                       fmt::format("{}: roi {}x{}+{}+{} does not fit in the {}x{} frame", uri, roi.width,
                                   roi.height, roi.x, roi.y, frame.image.cols, frame.image.rows));
   }
@@ -183,7 +183,7 @@ std::string Validation::message() const {
 
 Frame Camera::capture(std::chrono::milliseconds timeout) {
   if (auto frame = wait_frame(timeout)) return std::move(*frame);
-  throw CameraError(CameraError::Kind::Timeout,
+  throw CameraError(CameraError::Kind::kTimeout,
                     fmt::format("{}: no frame within {} ms", uri(), timeout.count()));
 }
 
@@ -281,10 +281,10 @@ std::unique_ptr<Camera> open_camera_uri(const std::string& uri) {
          list_forms(schemes));
   }
   if (!it->unavailable.empty()) {
-    throw CameraError(CameraError::Kind::Unsupported, fmt::format("{}: {}", uri, it->unavailable));
+    throw CameraError(CameraError::Kind::kUnsupported, fmt::format("{}: {}", uri, it->unavailable));
   }
   if (!it->open)
-    throw CameraError(CameraError::Kind::Unsupported, fmt::format("{}: scheme has no opener", uri));
+    throw CameraError(CameraError::Kind::kUnsupported, fmt::format("{}: scheme has no opener", uri));
   return it->open(parsed);
 }
 

@@ -75,7 +75,7 @@ class FakeCamera final : public camera::Camera {
   explicit FakeCamera(Dome& dome) : Camera("fake:cam"), dome_(dome) {}
   camera::CameraInfo info() const override { return {uri(), "fake", "test"}; }
   std::vector<camera::FormatInfo> formats() const override { return {}; }
-  std::vector<camera::TriggerMode> trigger_modes() const override { return {camera::TriggerMode::Software}; }
+  std::vector<camera::TriggerMode> trigger_modes() const override { return {camera::TriggerMode::kSoftware}; }
   camera::CameraConfig default_config() const override { return {}; }
   camera::Validation validate(camera::CameraConfig&) const override { return {}; }
   void configure(const camera::CameraConfig& config) override { trigger_mode = config.trigger; }
@@ -106,7 +106,7 @@ class FakeCamera final : public camera::Camera {
     return frame;
   }
 
-  camera::TriggerMode trigger_mode = camera::TriggerMode::FreeRun;
+  camera::TriggerMode trigger_mode = camera::TriggerMode::kFreeRun;
   double exposure_us = 0;
   int triggers = 0;
   std::vector<int> drop;
@@ -141,7 +141,7 @@ TEST(CaptureRunner, ResolvesLoopAndTriggerAndStartsTheCameraForIt) {
   EXPECT_FALSE(runner.closed_loop());  // auto, and no strobe input
   EXPECT_FALSE(runner.hardware_trigger());
   runner.start();
-  EXPECT_EQ(bench.cam.trigger_mode, camera::TriggerMode::Software);
+  EXPECT_EQ(bench.cam.trigger_mode, camera::TriggerMode::kSoftware);
   EXPECT_TRUE(bench.cam.streaming());
   EXPECT_DOUBLE_EQ(runner.gain(), 1.5);
   runner.stop();

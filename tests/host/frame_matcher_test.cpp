@@ -18,7 +18,7 @@ TEST(FrameMatcher, StartOfExposureStampsFollowTheirTrigger) {
   std::vector<FrameTiming> frames;
   for (int i = 0; i < 5; ++i) {
     frames.push_back({steps[static_cast<std::size_t>(i)].trigger_ns + 100'000,
-                      TimestampPoint::StartOfExposure, static_cast<std::uint64_t>(i)});
+                      TimestampPoint::kStartOfExposure, static_cast<std::uint64_t>(i)});
   }
   std::swap(frames[1], frames[3]);  // arrival order does not matter
   const FrameMatch m = match_frames(steps, frames);
@@ -33,8 +33,8 @@ TEST(FrameMatcher, ADroppedFrameLeavesItsStepEmptyAndShowsAsASequenceGap) {
   const auto steps = steps_every(20'000'000, 4, 10'000);
   std::vector<FrameTiming> frames;
   for (int i : {0, 1, 3}) {
-    frames.push_back({steps[static_cast<std::size_t>(i)].trigger_ns + 50'000, TimestampPoint::StartOfExposure,
-                      static_cast<std::uint64_t>(i)});
+    frames.push_back({steps[static_cast<std::size_t>(i)].trigger_ns + 50'000,
+                      TimestampPoint::kStartOfExposure, static_cast<std::uint64_t>(i)});
   }
   const FrameMatch m = match_frames(steps, frames);
   EXPECT_EQ(m.dropped(), 1u);
@@ -46,10 +46,10 @@ TEST(FrameMatcher, ADroppedFrameLeavesItsStepEmptyAndShowsAsASequenceGap) {
 TEST(FrameMatcher, DuplicatesAndStraysAreLeftOver) {
   const auto steps = steps_every(20'000'000, 2, 10'000);
   const std::vector<FrameTiming> frames = {
-      {steps[0].trigger_ns + 10'000, TimestampPoint::StartOfExposure, 0},
-      {steps[0].trigger_ns + 20'000, TimestampPoint::StartOfExposure, 1},  // a second frame for one trigger
-      {steps[1].trigger_ns + 10'000, TimestampPoint::StartOfExposure, 2},
-      {steps[0].trigger_ns - 5'000'000, TimestampPoint::StartOfExposure, 3},  // before any trigger
+      {steps[0].trigger_ns + 10'000, TimestampPoint::kStartOfExposure, 0},
+      {steps[0].trigger_ns + 20'000, TimestampPoint::kStartOfExposure, 1},  // a second frame for one trigger
+      {steps[1].trigger_ns + 10'000, TimestampPoint::kStartOfExposure, 2},
+      {steps[0].trigger_ns - 5'000'000, TimestampPoint::kStartOfExposure, 3},  // before any trigger
   };
   const FrameMatch m = match_frames(steps, frames);
   EXPECT_EQ(m.dropped(), 0u);
@@ -64,13 +64,13 @@ TEST(FrameMatcher, EndOfFrameStampsComeAfterTheExposure) {
   std::vector<FrameTiming> frames;
   for (int i = 0; i < 3; ++i) {
     frames.push_back({steps[static_cast<std::size_t>(i)].trigger_ns + 10'000'000 + 15'000'000,
-                      TimestampPoint::EndOfFrame, static_cast<std::uint64_t>(i)});
+                      TimestampPoint::kEndOfFrame, static_cast<std::uint64_t>(i)});
   }
   const FrameMatch m = match_frames(steps, frames);
   EXPECT_EQ(m.dropped(), 0u);
   for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ(*m.frame_of_step[i], i);
   // A start-of-exposure stamp that late would belong to the next trigger instead.
-  frames[0].point = TimestampPoint::StartOfExposure;
+  frames[0].point = TimestampPoint::kStartOfExposure;
   frames[0].timestamp_ns = steps[1].trigger_ns + 1000;
   const FrameMatch late = match_frames(steps, {frames[0]});
   EXPECT_FALSE(late.frame_of_step[0]);

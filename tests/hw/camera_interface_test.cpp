@@ -49,7 +49,7 @@ class StubCamera final : public Camera {
   explicit StubCamera(std::string uri) : Camera(std::move(uri)) {}
   CameraInfo info() const override { return {uri(), "stub", "test"}; }
   std::vector<FormatInfo> formats() const override { return {}; }
-  std::vector<TriggerMode> trigger_modes() const override { return {TriggerMode::FreeRun}; }
+  std::vector<TriggerMode> trigger_modes() const override { return {TriggerMode::kFreeRun}; }
   CameraConfig default_config() const override { return {}; }
   Validation validate(CameraConfig&) const override { return {}; }
   void configure(const CameraConfig&) override {}
@@ -77,7 +77,7 @@ TEST(CameraRegistry, OpensThroughARegisteredScheme) {
     cam->capture(std::chrono::milliseconds(3));
     ADD_FAILURE();
   } catch (const CameraError& e) {
-    EXPECT_EQ(e.kind(), CameraError::Kind::Timeout);
+    EXPECT_EQ(e.kind(), CameraError::Kind::kTimeout);
     EXPECT_THAT(e.what(), HasSubstr("stubcam:one"));
   }
 }
@@ -97,48 +97,48 @@ TEST(CameraRegistry, UnknownAndUnavailableSchemes) {
     open_camera_uri("ghostcam:1");
     ADD_FAILURE();
   } catch (const CameraError& e) {
-    EXPECT_EQ(e.kind(), CameraError::Kind::Unsupported);
+    EXPECT_EQ(e.kind(), CameraError::Kind::kUnsupported);
     EXPECT_THAT(e.what(), HasSubstr("ghostcam:1"));
     EXPECT_THAT(e.what(), HasSubstr("no ghost backend"));
   }
 }
 
 TEST(ClockDomain, BoottimeToMonotonicMatchesNow) {
-  const std::int64_t boot = clock_now_ns(ClockDomain::Boottime);
-  const std::int64_t mono = clock_now_ns(ClockDomain::Monotonic);
-  const std::int64_t converted = convert_timestamp_ns(boot, ClockDomain::Boottime, ClockDomain::Monotonic);
+  const std::int64_t boot = clock_now_ns(ClockDomain::kBoottime);
+  const std::int64_t mono = clock_now_ns(ClockDomain::kMonotonic);
+  const std::int64_t converted = convert_timestamp_ns(boot, ClockDomain::kBoottime, ClockDomain::kMonotonic);
   EXPECT_NEAR(static_cast<double>(converted), static_cast<double>(mono), 1e6);  // within 1 ms
   // BOOTTIME counts suspend too, so it is never behind MONOTONIC.
-  EXPECT_GE(clock_offset_ns(ClockDomain::Monotonic, ClockDomain::Boottime), -1000);
+  EXPECT_GE(clock_offset_ns(ClockDomain::kMonotonic, ClockDomain::kBoottime), -1000);
   // There and back again.
   const std::int64_t t = 123'456'789'000;
   const std::int64_t round_trip =
-      convert_timestamp_ns(convert_timestamp_ns(t, ClockDomain::Boottime, ClockDomain::Monotonic),
-                           ClockDomain::Monotonic, ClockDomain::Boottime);
+      convert_timestamp_ns(convert_timestamp_ns(t, ClockDomain::kBoottime, ClockDomain::kMonotonic),
+                           ClockDomain::kMonotonic, ClockDomain::kBoottime);
   EXPECT_NEAR(static_cast<double>(round_trip), static_cast<double>(t), 1e5);
-  EXPECT_EQ(convert_timestamp_ns(t, ClockDomain::Monotonic, ClockDomain::Monotonic), t);
-  EXPECT_THROW(convert_timestamp_ns(t, ClockDomain::Unknown, ClockDomain::Monotonic), CameraError);
+  EXPECT_EQ(convert_timestamp_ns(t, ClockDomain::kMonotonic, ClockDomain::kMonotonic), t);
+  EXPECT_THROW(convert_timestamp_ns(t, ClockDomain::kUnknown, ClockDomain::kMonotonic), CameraError);
 }
 
 TEST(Cfa, CropOffsetsShiftThePattern) {
-  EXPECT_EQ(cfa_at(Cfa::RGGB, 0, 0), Cfa::RGGB);
-  EXPECT_EQ(cfa_at(Cfa::RGGB, 1, 0), Cfa::GRBG);
-  EXPECT_EQ(cfa_at(Cfa::RGGB, 0, 1), Cfa::GBRG);
-  EXPECT_EQ(cfa_at(Cfa::RGGB, 1, 1), Cfa::BGGR);
-  EXPECT_EQ(cfa_at(Cfa::BGGR, 3, 5), Cfa::RGGB);
-  EXPECT_EQ(cfa_at(Cfa::GRBG, 2, 1), Cfa::BGGR);
-  EXPECT_EQ(cfa_at(Cfa::None, 1, 1), Cfa::None);
+  EXPECT_EQ(cfa_at(Cfa::kRGGB, 0, 0), Cfa::kRGGB);
+  EXPECT_EQ(cfa_at(Cfa::kRGGB, 1, 0), Cfa::kGRBG);
+  EXPECT_EQ(cfa_at(Cfa::kRGGB, 0, 1), Cfa::kGBRG);
+  EXPECT_EQ(cfa_at(Cfa::kRGGB, 1, 1), Cfa::kBGGR);
+  EXPECT_EQ(cfa_at(Cfa::kBGGR, 3, 5), Cfa::kRGGB);
+  EXPECT_EQ(cfa_at(Cfa::kGRBG, 2, 1), Cfa::kBGGR);
+  EXPECT_EQ(cfa_at(Cfa::kNone, 1, 1), Cfa::kNone);
 }
 
 TEST(Cfa, CropFrameChecksBounds) {
   Frame f;
   f.image = cv::Mat(4, 6, CV_16UC1, cv::Scalar(0));
   f.image.at<std::uint16_t>(1, 3) = 77;
-  f.cfa = Cfa::BGGR;
+  f.cfa = Cfa::kBGGR;
   crop_frame(f, {3, 1, 2, 2}, "test:cam");
   EXPECT_EQ(f.image.size(), cv::Size(2, 2));
   EXPECT_EQ(f.image.at<std::uint16_t>(0, 0), 77);
-  EXPECT_EQ(f.cfa, Cfa::RGGB);
+  EXPECT_EQ(f.cfa, Cfa::kRGGB);
   try {
     crop_frame(f, {1, 1, 2, 2}, "test:cam");
     ADD_FAILURE();

@@ -20,7 +20,7 @@ TEST(LibcameraCamera, UnknownIdNamesItAndListsTheCameras) {
     hw::open_camera("libcamera:/base/soc/i2c0mux/i2c@1/imx999@1a");
     ADD_FAILURE() << "opened a camera that cannot exist";
   } catch (const CameraError& e) {
-    EXPECT_EQ(e.kind(), CameraError::Kind::NotFound) << e.what();
+    EXPECT_EQ(e.kind(), CameraError::Kind::kNotFound) << e.what();
     EXPECT_THAT(e.what(), HasSubstr("libcamera:/base/soc/i2c0mux/i2c@1/imx999@1a"));
     bool any_libcamera = false;
     for (const auto& c : cameras) any_libcamera |= c.uri.rfind("libcamera:", 0) == 0;
@@ -41,7 +41,7 @@ TEST(LibcameraCamera, FirstCameraWhenNoneIsNamed) {
     hw::open_camera("libcamera:");
     ADD_FAILURE();
   } catch (const CameraError& e) {
-    EXPECT_EQ(e.kind(), CameraError::Kind::NotFound);
+    EXPECT_EQ(e.kind(), CameraError::Kind::kNotFound);
     EXPECT_THAT(e.what(), HasSubstr("no camera"));
   }
 }
@@ -57,7 +57,7 @@ TEST(LibcameraCamera, AbsentBackendSaysSo) {
     hw::open_camera("libcamera:x");
     ADD_FAILURE();
   } catch (const CameraError& e) {
-    EXPECT_EQ(e.kind(), CameraError::Kind::Unsupported);
+    EXPECT_EQ(e.kind(), CameraError::Kind::kUnsupported);
     EXPECT_THAT(e.what(), HasSubstr("libcamera"));
   }
 }

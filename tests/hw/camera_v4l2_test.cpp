@@ -36,7 +36,7 @@ CameraError::Kind error_kind(F&& f, std::string* message = nullptr) {
     return e.kind();
   }
   ADD_FAILURE() << "no CameraError thrown";
-  return CameraError::Kind::Failed;
+  return CameraError::Kind::kFailed;
 }
 
 int count(const std::vector<std::string>& log, const std::string& what) {
@@ -56,7 +56,7 @@ TEST(V4l2Camera, ListsTheFormatsItCanUnpack) {
   EXPECT_EQ(formats[0].sizes[1].max, (camera::Size{320, 240}));
   EXPECT_EQ(formats[1].bit_depth, 10);
   EXPECT_EQ(formats[2].bit_depth, 12);
-  EXPECT_EQ(formats[2].cfa, camera::Cfa::RGGB);
+  EXPECT_EQ(formats[2].cfa, camera::Cfa::kRGGB);
   // The default is what the driver had in force.
   EXPECT_EQ(cam->default_config().pixel_format, "GREY");
   EXPECT_EQ(cam->default_config().size, (camera::Size{640, 480}));
@@ -76,22 +76,22 @@ TEST(V4l2Camera, OpeningChangesNothingUntilStart) {
 TEST(V4l2Camera, OpenErrorsNameTheUri) {
   auto dev = std::make_shared<test::FakeV4l2Device>();
   std::string message;
-  EXPECT_EQ(error_kind([&] { open_fake(dev, "v4l2:/dev/video7"); }, &message), CameraError::Kind::NotFound);
+  EXPECT_EQ(error_kind([&] { open_fake(dev, "v4l2:/dev/video7"); }, &message), CameraError::Kind::kNotFound);
   EXPECT_THAT(message, HasSubstr("v4l2:/dev/video7"));
 
   dev->open_errno = EACCES;
-  EXPECT_EQ(error_kind([&] { open_fake(dev); }, &message), CameraError::Kind::Failed);
+  EXPECT_EQ(error_kind([&] { open_fake(dev); }, &message), CameraError::Kind::kFailed);
   EXPECT_THAT(message, HasSubstr("group 'video'"));
 
   dev->open_errno = 0;
   dev->capabilities = V4L2_CAP_VIDEO_CAPTURE_MPLANE | V4L2_CAP_STREAMING;
-  EXPECT_EQ(error_kind([&] { open_fake(dev); }, &message), CameraError::Kind::Unsupported);
+  EXPECT_EQ(error_kind([&] { open_fake(dev); }, &message), CameraError::Kind::kUnsupported);
   EXPECT_THAT(message, HasSubstr("multi-planar"));
   EXPECT_FALSE(dev->is_open);  // closed again on failure
 
   dev->capabilities = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING;
   dev->formats = {{V4L2_PIX_FMT_MJPEG, {{640, 480}}}};
-  EXPECT_EQ(error_kind([&] { open_fake(dev); }, &message), CameraError::Kind::Unsupported);
+  EXPECT_EQ(error_kind([&] { open_fake(dev); }, &message), CameraError::Kind::kUnsupported);
   EXPECT_THAT(message, HasSubstr("MJPG"));
 }
 
@@ -111,7 +111,7 @@ TEST(V4l2Camera, ValidationAdjustsAndConfigureAppliesOnlyValid) {
   camera::CameraConfig config;
   config.pixel_format = "Y16";  // not offered
   camera::Validation v = cam->validate(config);
-  EXPECT_EQ(v.status, camera::ConfigStatus::Invalid);
+  EXPECT_EQ(v.status, camera::ConfigStatus::kInvalid);
   EXPECT_THAT(v.message(), HasSubstr("'Y16'"));
   EXPECT_THAT(v.message(), HasSubstr("GREY, Y10, SRGGB12, YUYV"));
 
@@ -120,7 +120,7 @@ TEST(V4l2Camera, ValidationAdjustsAndConfigureAppliesOnlyValid) {
   config.size = {330, 250};
   config.roi = camera::Roi{300, 200, 100, 100};
   v = cam->validate(config);
-  EXPECT_EQ(v.status, camera::ConfigStatus::Adjusted);
+  EXPECT_EQ(v.status, camera::ConfigStatus::kAdjusted);
   EXPECT_EQ(config.size, (camera::Size{320, 240}));
   EXPECT_EQ(*config.roi, (camera::Roi{300, 200, 20, 40}));
   ASSERT_EQ(v.notes.size(), 2u);
@@ -131,10 +131,10 @@ TEST(V4l2Camera, ValidationAdjustsAndConfigureAppliesOnlyValid) {
   raw.pixel_format = "GREY";
   raw.size = {330, 250};
   std::string message;
-  EXPECT_EQ(error_kind([&] { cam->configure(raw); }, &message), CameraError::Kind::Failed);
+  EXPECT_EQ(error_kind([&] { cam->configure(raw); }, &message), CameraError::Kind::kFailed);
   EXPECT_THAT(message, HasSubstr("adjusted"));
   EXPECT_EQ(count(dev->log, "S_FMT"), 0);
-  EXPECT_EQ(cam->validate(config).status, camera::ConfigStatus::Valid);
+  EXPECT_EQ(cam->validate(config).status, camera::ConfigStatus::kValid);
   cam->configure(config);
   EXPECT_EQ(count(dev->log, "S_FMT"), 1);
   EXPECT_EQ(dev->fmt.width, 320u);
@@ -146,7 +146,7 @@ TEST(V4l2Camera, BufferCycleSequenceAndTimestamps) {
   auto cam = open_fake(dev);
   camera::CameraConfig config = cam->default_config();
   config.buffer_count = 3;
-  ASSERT_EQ(cam->validate(config).status, camera::ConfigStatus::Valid);
+  ASSERT_EQ(cam->validate(config).status, camera::ConfigStatus::kValid);
   cam->configure(config);
   cam->start();
   EXPECT_TRUE(cam->streaming());
@@ -162,8 +162,8 @@ TEST(V4l2Camera, BufferCycleSequenceAndTimestamps) {
     const camera::Frame f = cam->capture(1s);
     EXPECT_EQ(f.sequence, i);
     EXPECT_EQ(f.timestamp_ns, 10 * kSecond + i * 33'000'000);
-    EXPECT_EQ(f.clock, camera::ClockDomain::Monotonic);
-    EXPECT_EQ(f.timestamp_point, camera::TimestampPoint::EndOfFrame);
+    EXPECT_EQ(f.clock, camera::ClockDomain::kMonotonic);
+    EXPECT_EQ(f.timestamp_point, camera::TimestampPoint::kEndOfFrame);
     EXPECT_EQ(f.image.type(), CV_8UC1);
     EXPECT_EQ(f.image.size(), cv::Size(640, 480));
     EXPECT_EQ(f.image.at<std::uint8_t>(479, 639), i * 10);
@@ -222,7 +222,7 @@ TEST(V4l2Camera, TimeoutIsNulloptOrANamedError) {
   cam->start();
   EXPECT_FALSE(cam->wait_frame(5ms).has_value());
   std::string message;
-  EXPECT_EQ(error_kind([&] { cam->capture(5ms); }, &message), CameraError::Kind::Timeout);
+  EXPECT_EQ(error_kind([&] { cam->capture(5ms); }, &message), CameraError::Kind::kTimeout);
   EXPECT_THAT(message, HasSubstr("v4l2:/dev/video0"));
   EXPECT_THAT(message, HasSubstr("5 ms"));
 }
@@ -235,7 +235,7 @@ TEST(V4l2Camera, UnplugIsACleanDisconnectError) {
   EXPECT_EQ(cam->capture(1s).sequence, 0u);
   dev->unplugged = true;
   std::string message;
-  EXPECT_EQ(error_kind([&] { cam->wait_frame(10ms); }, &message), CameraError::Kind::Disconnected);
+  EXPECT_EQ(error_kind([&] { cam->wait_frame(10ms); }, &message), CameraError::Kind::kDisconnected);
   EXPECT_THAT(message, HasSubstr("v4l2:/dev/video0"));
   EXPECT_THAT(message, HasSubstr("disconnected"));
   EXPECT_NO_THROW(cam->stop());
@@ -267,7 +267,7 @@ TEST(V4l2Camera, ExposureAbsoluteIsIn100UsAndGainRelativeToUnity) {
 
   std::string message;
   EXPECT_EQ(error_kind([&] { cam->set_controls({.exposure_us = 1e7}); }, &message),
-            CameraError::Kind::Failed);
+            CameraError::Kind::kFailed);
   EXPECT_THAT(message, HasSubstr("exposure_us 10000000"));
   EXPECT_THAT(message, HasSubstr("[100, 500000]"));
   EXPECT_EQ(dev->controls[V4L2_CID_EXPOSURE_ABSOLUTE].value, 80);  // untouched
@@ -297,7 +297,7 @@ TEST(V4l2Camera, ExposureInLinesUsesPixelRateAndBlanking) {
   auto unknown = open_fake(dev);
   std::string message;
   EXPECT_EQ(error_kind([&] { unknown->set_controls({.exposure_us = 5000}); }, &message),
-            CameraError::Kind::Unsupported);
+            CameraError::Kind::kUnsupported);
   EXPECT_THAT(message, HasSubstr("exposure_unit_us"));
   auto told = open_fake(dev, "v4l2:/dev/video0?exposure_unit_us=20&gain_unity=16");
   EXPECT_DOUBLE_EQ(*told->set_controls({.exposure_us = 5000, .analogue_gain = 2}).exposure_us, 5000);
@@ -312,7 +312,7 @@ TEST(V4l2Camera, DeepAndBayerFramesAreUnpackedWithStride) {
   camera::CameraConfig config;
   config.pixel_format = "SRGGB12";
   config.roi = camera::Roi{1, 0, 4, 2};  // odd x: the pattern seen becomes GRBG
-  ASSERT_EQ(cam->validate(config).status, camera::ConfigStatus::Valid);
+  ASSERT_EQ(cam->validate(config).status, camera::ConfigStatus::kValid);
   cam->configure(config);
   EXPECT_EQ(dev->fmt.bytesperline, 640u * 2 + 64);
   cam->start();
@@ -327,14 +327,14 @@ TEST(V4l2Camera, DeepAndBayerFramesAreUnpackedWithStride) {
   EXPECT_EQ(f.image.type(), CV_16UC1);
   EXPECT_EQ(f.image.size(), cv::Size(4, 2));
   EXPECT_EQ(f.bit_depth, 12);
-  EXPECT_EQ(f.cfa, camera::Cfa::GRBG);
+  EXPECT_EQ(f.cfa, camera::Cfa::kGRBG);
   EXPECT_EQ(f.image.at<std::uint16_t>(1, 0), 7);
   EXPECT_EQ(f.image.at<std::uint16_t>(1, 3), 28);
   cam->stop();
 
   config = {};
   config.pixel_format = "YUYV";
-  ASSERT_EQ(cam->validate(config).status, camera::ConfigStatus::Valid);
+  ASSERT_EQ(cam->validate(config).status, camera::ConfigStatus::kValid);
   cam->configure(config);
   cam->start();
   row.clear();
@@ -354,29 +354,29 @@ TEST(V4l2Camera, SoftwareTriggerDeliversTheFirstFrameExposedAfterIt) {
   dev->timestamps_soe = true;
   auto cam = open_fake(dev);
   camera::CameraConfig config = cam->default_config();
-  config.trigger = camera::TriggerMode::Software;
+  config.trigger = camera::TriggerMode::kSoftware;
   cam->configure(config);
   EXPECT_THROW(cam->trigger(), CameraError);  // not streaming
   cam->start();
   const std::vector<std::uint8_t> row(640, 1);
   // Before any trigger nothing is delivered.
-  dev->sensor.push_back(dev->frame_of_rows(0, camera::clock_now_ns(camera::ClockDomain::Monotonic), row));
+  dev->sensor.push_back(dev->frame_of_rows(0, camera::clock_now_ns(camera::ClockDomain::kMonotonic), row));
   EXPECT_FALSE(cam->wait_frame(5ms).has_value());
   cam->trigger();
-  const std::int64_t now = camera::clock_now_ns(camera::ClockDomain::Monotonic);
+  const std::int64_t now = camera::clock_now_ns(camera::ClockDomain::kMonotonic);
   dev->sensor.push_back(dev->frame_of_rows(1, now - 1'000'000, row));   // exposed before the trigger
   dev->sensor.push_back(dev->frame_of_rows(2, now + 30'000'000, row));  // after
   dev->sensor.push_back(dev->frame_of_rows(3, now + 60'000'000, row));  // not asked for
   const auto f = cam->wait_frame(1s);  // the fake never sleeps: no frame returns at once
   ASSERT_TRUE(f.has_value());
   EXPECT_EQ(f->sequence, 2u);
-  EXPECT_EQ(f->timestamp_point, camera::TimestampPoint::StartOfExposure);
+  EXPECT_EQ(f->timestamp_point, camera::TimestampPoint::kStartOfExposure);
   EXPECT_FALSE(cam->wait_frame(5ms).has_value());
 
   // Free-run cameras refuse trigger().
   auto free_run = open_fake(std::make_shared<test::FakeV4l2Device>());
   free_run->start();
-  EXPECT_EQ(error_kind([&] { free_run->trigger(); }), CameraError::Kind::Unsupported);
+  EXPECT_EQ(error_kind([&] { free_run->trigger(); }), CameraError::Kind::kUnsupported);
 }
 
 TEST(V4l2Camera, UnknownClockIsRecordedAsSuch) {
@@ -385,13 +385,14 @@ TEST(V4l2Camera, UnknownClockIsRecordedAsSuch) {
   auto cam = open_fake(dev);
   cam->start();
   dev->sensor.push_back(dev->frame_of_rows(0, kSecond, std::vector<std::uint8_t>(640, 1)));
-  EXPECT_EQ(cam->capture(1s).clock, camera::ClockDomain::Unknown);
+  EXPECT_EQ(cam->capture(1s).clock, camera::ClockDomain::kUnknown);
 }
 
 TEST(V4l2Camera, MissingRealDeviceThroughTheRegistry) {
   // The real system calls: CI has no /dev/video99.
   std::string message;
-  EXPECT_EQ(error_kind([&] { hw::open_camera("v4l2:/dev/video99"); }, &message), CameraError::Kind::NotFound);
+  EXPECT_EQ(error_kind([&] { hw::open_camera("v4l2:/dev/video99"); }, &message),
+            CameraError::Kind::kNotFound);
   EXPECT_THAT(message, HasSubstr("v4l2:/dev/video99"));
 }
 

@@ -115,8 +115,8 @@ class VirtualCameraTest : public ::testing::Test {
 TEST_F(VirtualCameraTest, HardwareTriggerSeesTheLedsOnDuringTheExposure) {
   auto cam = open_sim_camera(socket_);
   auto config = cam->default_config();
-  config.trigger = lightstage::camera::TriggerMode::Hardware;
-  ASSERT_EQ(cam->validate(config).status, lightstage::camera::ConfigStatus::Valid);
+  config.trigger = lightstage::camera::TriggerMode::kHardware;
+  ASSERT_EQ(cam->validate(config).status, lightstage::camera::ConfigStatus::kValid);
   cam->configure(config);
   cam->set_controls({2000.0, std::nullopt});
   cam->start();
@@ -132,7 +132,7 @@ TEST_F(VirtualCameraTest, HardwareTriggerSeesTheLedsOnDuringTheExposure) {
   const auto frame = cam->wait_frame(milliseconds(3000));
   ASSERT_TRUE(frame);
   EXPECT_EQ(frame->timestamp_ns, start);
-  EXPECT_EQ(frame->clock, lightstage::camera::ClockDomain::Monotonic);
+  EXPECT_EQ(frame->clock, lightstage::camera::ClockDomain::kMonotonic);
   EXPECT_DOUBLE_EQ(frame->exposure_us, 2000.0);
   ASSERT_EQ(frame->image.type(), CV_16UC1);
   const cv::Mat want = expected({{0, 1.0}, {1, 0.5}}, 2000.0);
@@ -145,7 +145,7 @@ TEST_F(VirtualCameraTest, HardwareTriggerSeesTheLedsOnDuringTheExposure) {
 TEST_F(VirtualCameraTest, SoftwareTriggerAndRoi) {
   auto cam = open_sim_camera(socket_);
   auto config = cam->default_config();
-  config.trigger = lightstage::camera::TriggerMode::Software;
+  config.trigger = lightstage::camera::TriggerMode::kSoftware;
   config.roi = lightstage::camera::Roi{10, 5, 20, 30};
   cam->configure(config);
   cam->start();
@@ -164,7 +164,7 @@ TEST_F(VirtualCameraTest, BadRequestsAreCameraErrors) {
   auto cam = open_sim_camera(socket_);
   auto config = cam->default_config();
   config.roi = lightstage::camera::Roi{30, 30, 20, 20};
-  EXPECT_EQ(cam->validate(config).status, lightstage::camera::ConfigStatus::Invalid);
+  EXPECT_EQ(cam->validate(config).status, lightstage::camera::ConfigStatus::kInvalid);
   EXPECT_THROW(cam->configure(config), lightstage::camera::CameraError);
   EXPECT_THROW(cam->trigger(), lightstage::camera::CameraError) << "not in software mode";
   EXPECT_THROW(cam->wait_frame(milliseconds(10)), lightstage::camera::CameraError) << "not streaming";
@@ -177,7 +177,7 @@ TEST(SimCamera, NobodyServingIsNotFound) {
     open_sim_camera((testing::socket_dir() / "nobody.sock").string());
     FAIL();
   } catch (const lightstage::camera::CameraError& e) {
-    EXPECT_EQ(e.kind(), lightstage::camera::CameraError::Kind::NotFound);
+    EXPECT_EQ(e.kind(), lightstage::camera::CameraError::Kind::kNotFound);
     EXPECT_NE(std::string(e.what()).find("nobody.sock"), std::string::npos);
   }
 }

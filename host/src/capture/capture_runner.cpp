@@ -31,14 +31,14 @@ CaptureRunner::CaptureRunner(ControllerClient& controller, camera::Camera& cam, 
   const bool strobe = controller_.info().capabilities().strobe_input();
   if (options_.loop == "closed" && !strobe) fail("--loop closed: the controller's rig has no strobe input");
   closed_loop_ = options_.loop == "closed" || (options_.loop == "auto" && strobe);
-  hardware_ = std::ranges::count(cam_.trigger_modes(), camera::TriggerMode::Hardware) > 0;
+  hardware_ = std::ranges::count(cam_.trigger_modes(), camera::TriggerMode::kHardware) > 0;
 }
 
 void CaptureRunner::start() {
   camera::CameraConfig config = cam_.default_config();
-  config.trigger = hardware_ ? camera::TriggerMode::Hardware : camera::TriggerMode::Software;
+  config.trigger = hardware_ ? camera::TriggerMode::kHardware : camera::TriggerMode::kSoftware;
   const camera::Validation v = cam_.validate(config);
-  if (v.status == camera::ConfigStatus::Invalid) {
+  if (v.status == camera::ConfigStatus::kInvalid) {
     fail("{}: cannot configure for capture: {}", cam_.uri(), v.message());
   }
   cam_.configure(config);
@@ -163,9 +163,9 @@ Batch CaptureRunner::run_batch_once(const std::vector<Shot>& shots) {
   std::vector<FrameTiming> timings;
   for (const auto& f : frames) {
     const std::int64_t t =
-        f.clock == camera::ClockDomain::Unknown
+        f.clock == camera::ClockDomain::kUnknown
             ? f.timestamp_ns
-            : camera::convert_timestamp_ns(f.timestamp_ns, f.clock, camera::ClockDomain::Monotonic);
+            : camera::convert_timestamp_ns(f.timestamp_ns, f.clock, camera::ClockDomain::kMonotonic);
     timings.push_back({t, f.timestamp_point, f.sequence});
   }
   const FrameMatch match = match_frames(steps, timings);

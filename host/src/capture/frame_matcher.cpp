@@ -31,15 +31,15 @@ FrameMatch match_frames(const std::vector<StepTiming>& steps, const std::vector<
       if (used[f]) continue;
       const FrameTiming& frame = frames[f];
       std::int64_t lo = step.trigger_ns, hi = step.trigger_ns + options.max_start_latency_ns;
-      if (frame.point == camera::TimestampPoint::EndOfFrame) {
+      if (frame.point == camera::TimestampPoint::kEndOfFrame) {
         lo = step.trigger_ns + exposure_ns;
         hi = lo + options.max_start_latency_ns + options.max_readout_ns;
-      } else if (frame.point == camera::TimestampPoint::Unknown) {
+      } else if (frame.point == camera::TimestampPoint::kUnknown) {
         hi = std::max(hi,
                       step.trigger_ns + exposure_ns + options.max_start_latency_ns + options.max_readout_ns);
       }
       // A start-of-exposure stamp after the next trigger belongs to that trigger.
-      if (frame.point != camera::TimestampPoint::EndOfFrame) hi = std::min(hi, next_trigger);
+      if (frame.point != camera::TimestampPoint::kEndOfFrame) hi = std::min(hi, next_trigger);
       if (frame.timestamp_ns < lo || frame.timestamp_ns > hi) continue;
       if (!best || frame.timestamp_ns < frames[*best].timestamp_ns) best = f;
     }

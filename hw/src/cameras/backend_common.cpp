@@ -10,18 +10,18 @@ namespace lightstage::hw {
 using camera::CameraError;
 
 void note_adjusted(camera::Validation& v, std::string note) {
-  if (v.status == camera::ConfigStatus::Valid) v.status = camera::ConfigStatus::Adjusted;
+  if (v.status == camera::ConfigStatus::kValid) v.status = camera::ConfigStatus::kAdjusted;
   v.notes.push_back(std::move(note));
 }
 
 void note_invalid(camera::Validation& v, std::string note) {
-  v.status = camera::ConfigStatus::Invalid;
+  v.status = camera::ConfigStatus::kInvalid;
   v.notes.push_back(std::move(note));
 }
 
 void check_software_trigger(const camera::CameraConfig& config, bool streaming, const std::string& uri) {
-  if (config.trigger != camera::TriggerMode::Software) {
-    throw CameraError(CameraError::Kind::Unsupported,
+  if (config.trigger != camera::TriggerMode::kSoftware) {
+    throw CameraError(CameraError::Kind::kUnsupported,
                       fmt::format("{}: trigger() needs trigger mode software (configured: {})", uri,
                                   camera::to_string(config.trigger)));
   }

@@ -123,17 +123,17 @@ class LibcameraCamera final : public camera::Camera {
     std::string id = uri.target;
     if (id.empty()) {
       if (ids.empty())
-        throw CameraError(Kind::NotFound, fmt::format("{}: no camera: {}", uri.uri, list_ids(ids)));
+        throw CameraError(Kind::kNotFound, fmt::format("{}: no camera: {}", uri.uri, list_ids(ids)));
       id = ids.front();
     }
     camera_ = manager_->get(id);
     if (!camera_) {
-      throw CameraError(Kind::NotFound,
+      throw CameraError(Kind::kNotFound,
                         fmt::format("{}: no camera with id '{}'; {}", uri.uri, id, list_ids(ids)));
     }
     if (const int ret = camera_->acquire(); ret != 0) {
       camera_.reset();
-      throw CameraError(ret == -EBUSY ? Kind::Busy : Kind::Failed,
+      throw CameraError(ret == -EBUSY ? Kind::kBusy : Kind::kFailed,
                         fmt::format("{}: cannot acquire the camera: {}", uri.uri, std::strerror(-ret)));
     }
     id_ = id;
@@ -162,7 +162,7 @@ class LibcameraCamera final : public camera::Camera {
   }
   std::vector<camera::FormatInfo> formats() const override { return formats_; }
   std::vector<camera::TriggerMode> trigger_modes() const override {
-    return {camera::TriggerMode::FreeRun, camera::TriggerMode::Software, camera::TriggerMode::Hardware};
+    return {camera::TriggerMode::kFreeRun, camera::TriggerMode::kSoftware, camera::TriggerMode::kHardware};
   }
   camera::CameraConfig default_config() const override { return initial_config_; }
   camera::CameraConfig configuration() const override { return config_; }
@@ -179,7 +179,7 @@ class LibcameraCamera final : public camera::Camera {
     camera::CameraConfig config = requested;
     camera::Validation v;
     std::unique_ptr<libcamera::CameraConfiguration> lc = make_configuration(config, v);
-    if (!lc || v.status != camera::ConfigStatus::Valid) {
+    if (!lc || v.status != camera::ConfigStatus::kValid) {
       throw CameraError(fmt::format("{}: configuration is {} ({}); call validate() and apply what it returns",
                                     uri(), camera::to_string(v.status), v.message()));
     }
@@ -239,7 +239,7 @@ class LibcameraCamera final : public camera::Camera {
       const auto it = map.find(libcamera::controls::ExposureTime.id());
       if (it == map.end()) {
         throw CameraError(
-            Kind::Unsupported,
+            Kind::kUnsupported,
             fmt::format("{}: the camera offers no ExposureTime control (without the IPA package "
                         "libcamera-ipa a sensor has no exposure control; see hw/docs/cameras.md)",
                         uri()));
@@ -258,7 +258,7 @@ class LibcameraCamera final : public camera::Camera {
       const auto it = map.find(libcamera::controls::AnalogueGain.id());
       if (it == map.end()) {
         throw CameraError(
-            Kind::Unsupported,
+            Kind::kUnsupported,
             fmt::format("{}: the camera offers no AnalogueGain control (is libcamera-ipa installed?)",
                         uri()));
       }
@@ -318,8 +318,8 @@ class LibcameraCamera final : public camera::Camera {
   void trigger() override {
     check_software_trigger(config_, streaming_, uri());
     trigger_pending_ = true;
-    trigger_boottime_ns_ = camera::clock_now_ns(camera::ClockDomain::Boottime);
-    trigger_monotonic_ns_ = camera::clock_now_ns(camera::ClockDomain::Monotonic);
+    trigger_boottime_ns_ = camera::clock_now_ns(camera::ClockDomain::kBoottime);
+    trigger_monotonic_ns_ = camera::clock_now_ns(camera::ClockDomain::kMonotonic);
   }
 
   std::optional<camera::Frame> wait_frame(std::chrono::milliseconds timeout) override {
@@ -335,7 +335,7 @@ class LibcameraCamera final : public camera::Camera {
         }
         if (disconnected_) {
           streaming_ = false;
-          throw CameraError(Kind::Disconnected, fmt::format("{}: camera disconnected", uri()));
+          throw CameraError(Kind::kDisconnected, fmt::format("{}: camera disconnected", uri()));
         }
         request = completed_.front();
         completed_.pop_front();
@@ -429,7 +429,7 @@ class LibcameraCamera final : public camera::Camera {
     std::unique_ptr<libcamera::CameraConfiguration> lc =
         camera_->generateConfiguration({libcamera::StreamRole::Raw});
     if (!lc || lc->empty()) {
-      throw CameraError(Kind::Unsupported, fmt::format("{}: the camera offers no raw stream", uri()));
+      throw CameraError(Kind::kUnsupported, fmt::format("{}: the camera offers no raw stream", uri()));
     }
     const libcamera::StreamFormats& offered = lc->at(0).formats();
     for (const libcamera::PixelFormat& pf : offered.pixelformats()) {
@@ -454,7 +454,7 @@ class LibcameraCamera final : public camera::Camera {
       config_.pixel_format = formats_.front().pixel_format;
       config_.size = formats_.front().sizes.back().max;
     } else {
-      throw CameraError(Kind::Unsupported,
+      throw CameraError(Kind::kUnsupported,
                         fmt::format("{}: the raw stream's formats ({}) are none Lightstage can "
                                     "unpack",
                                     uri(), def.pixelFormat.toString()));
@@ -498,21 +498,21 @@ class LibcameraCamera final : public camera::Camera {
     const libcamera::ControlList& md = request.metadata();
     if (auto ts = md.get(libcamera::controls::SensorTimestamp)) {
       frame.timestamp_ns = *ts;
-      frame.clock = camera::ClockDomain::Boottime;
-      frame.timestamp_point = camera::TimestampPoint::StartOfExposure;
+      frame.clock = camera::ClockDomain::kBoottime;
+      frame.timestamp_point = camera::TimestampPoint::kStartOfExposure;
     } else {
       frame.timestamp_ns = static_cast<std::int64_t>(meta.timestamp);
-      frame.clock = camera::ClockDomain::Monotonic;
-      frame.timestamp_point = camera::TimestampPoint::Unknown;
+      frame.clock = camera::ClockDomain::kMonotonic;
+      frame.timestamp_point = camera::TimestampPoint::kUnknown;
     }
-    if (config_.trigger == camera::TriggerMode::Software) {
+    if (config_.trigger == camera::TriggerMode::kSoftware) {
       if (!trigger_pending_) return std::nullopt;
       const std::int64_t since =
-          frame.clock == camera::ClockDomain::Boottime ? trigger_boottime_ns_ : trigger_monotonic_ns_;
+          frame.clock == camera::ClockDomain::kBoottime ? trigger_boottime_ns_ : trigger_monotonic_ns_;
       // A start-of-exposure stamp is exact; a buffer stamp (end of frame) is
       // at most an exposure plus a readout after the exposure began.
       std::int64_t start = frame.timestamp_ns;
-      if (frame.timestamp_point != camera::TimestampPoint::StartOfExposure) {
+      if (frame.timestamp_point != camera::TimestampPoint::kStartOfExposure) {
         start -= static_cast<std::int64_t>(2 * exposure_us_ * 1000.0);
       }
       if (start < since) return std::nullopt;
@@ -561,8 +561,8 @@ class LibcameraCamera final : public camera::Camera {
 
   [[noreturn]] void fail_ret(const char* what, int ret) {
     if (ret == -ENODEV)
-      throw CameraError(Kind::Disconnected, fmt::format("{}: {}: camera disconnected", uri(), what));
-    if (ret == -EBUSY) throw CameraError(Kind::Busy, fmt::format("{}: {}: camera busy", uri(), what));
+      throw CameraError(Kind::kDisconnected, fmt::format("{}: {}: camera disconnected", uri(), what));
+    if (ret == -EBUSY) throw CameraError(Kind::kBusy, fmt::format("{}: {}: camera busy", uri(), what));
     if (ret == -EACCES) {
       throw CameraError(fmt::format("{}: {}: not allowed in the camera's current state", uri(), what));
     }

@@ -13,36 +13,36 @@ namespace {
 using camera::Cfa;
 
 constexpr std::array kFormats = {
-    PixelFormatDesc{"GREY", fourcc('G', 'R', 'E', 'Y'), 8, Cfa::None, Packing::Bytes8},
-    PixelFormatDesc{"Y10", fourcc('Y', '1', '0', ' '), 10, Cfa::None, Packing::Le16},
-    PixelFormatDesc{"Y12", fourcc('Y', '1', '2', ' '), 12, Cfa::None, Packing::Le16},
-    PixelFormatDesc{"Y16", fourcc('Y', '1', '6', ' '), 16, Cfa::None, Packing::Le16},
-    PixelFormatDesc{"Y10P", fourcc('Y', '1', '0', 'P'), 10, Cfa::None, Packing::Csi2P10},
-    PixelFormatDesc{"YUYV", fourcc('Y', 'U', 'Y', 'V'), 8, Cfa::None, Packing::YuyvLuma},
-    PixelFormatDesc{"SBGGR8", fourcc('B', 'A', '8', '1'), 8, Cfa::BGGR, Packing::Bytes8},
-    PixelFormatDesc{"SGBRG8", fourcc('G', 'B', 'R', 'G'), 8, Cfa::GBRG, Packing::Bytes8},
-    PixelFormatDesc{"SGRBG8", fourcc('G', 'R', 'B', 'G'), 8, Cfa::GRBG, Packing::Bytes8},
-    PixelFormatDesc{"SRGGB8", fourcc('R', 'G', 'G', 'B'), 8, Cfa::RGGB, Packing::Bytes8},
-    PixelFormatDesc{"SBGGR10", fourcc('B', 'G', '1', '0'), 10, Cfa::BGGR, Packing::Le16},
-    PixelFormatDesc{"SGBRG10", fourcc('G', 'B', '1', '0'), 10, Cfa::GBRG, Packing::Le16},
-    PixelFormatDesc{"SGRBG10", fourcc('B', 'A', '1', '0'), 10, Cfa::GRBG, Packing::Le16},
-    PixelFormatDesc{"SRGGB10", fourcc('R', 'G', '1', '0'), 10, Cfa::RGGB, Packing::Le16},
-    PixelFormatDesc{"SBGGR12", fourcc('B', 'G', '1', '2'), 12, Cfa::BGGR, Packing::Le16},
-    PixelFormatDesc{"SGBRG12", fourcc('G', 'B', '1', '2'), 12, Cfa::GBRG, Packing::Le16},
-    PixelFormatDesc{"SGRBG12", fourcc('B', 'A', '1', '2'), 12, Cfa::GRBG, Packing::Le16},
-    PixelFormatDesc{"SRGGB12", fourcc('R', 'G', '1', '2'), 12, Cfa::RGGB, Packing::Le16},
-    PixelFormatDesc{"SBGGR16", fourcc('B', 'Y', 'R', '2'), 16, Cfa::BGGR, Packing::Le16},
-    PixelFormatDesc{"SGBRG16", fourcc('G', 'B', '1', '6'), 16, Cfa::GBRG, Packing::Le16},
-    PixelFormatDesc{"SGRBG16", fourcc('G', 'R', '1', '6'), 16, Cfa::GRBG, Packing::Le16},
-    PixelFormatDesc{"SRGGB16", fourcc('R', 'G', '1', '6'), 16, Cfa::RGGB, Packing::Le16},
-    PixelFormatDesc{"SBGGR10P", fourcc('p', 'B', 'A', 'A'), 10, Cfa::BGGR, Packing::Csi2P10},
-    PixelFormatDesc{"SGBRG10P", fourcc('p', 'G', 'A', 'A'), 10, Cfa::GBRG, Packing::Csi2P10},
-    PixelFormatDesc{"SGRBG10P", fourcc('p', 'g', 'A', 'A'), 10, Cfa::GRBG, Packing::Csi2P10},
-    PixelFormatDesc{"SRGGB10P", fourcc('p', 'R', 'A', 'A'), 10, Cfa::RGGB, Packing::Csi2P10},
-    PixelFormatDesc{"SBGGR12P", fourcc('p', 'B', 'C', 'C'), 12, Cfa::BGGR, Packing::Csi2P12},
-    PixelFormatDesc{"SGBRG12P", fourcc('p', 'G', 'C', 'C'), 12, Cfa::GBRG, Packing::Csi2P12},
-    PixelFormatDesc{"SGRBG12P", fourcc('p', 'g', 'C', 'C'), 12, Cfa::GRBG, Packing::Csi2P12},
-    PixelFormatDesc{"SRGGB12P", fourcc('p', 'R', 'C', 'C'), 12, Cfa::RGGB, Packing::Csi2P12},
+    PixelFormatDesc{"GREY", fourcc('G', 'R', 'E', 'Y'), 8, Cfa::kNone, Packing::kBytes8},
+    PixelFormatDesc{"Y10", fourcc('Y', '1', '0', ' '), 10, Cfa::kNone, Packing::kLe16},
+    PixelFormatDesc{"Y12", fourcc('Y', '1', '2', ' '), 12, Cfa::kNone, Packing::kLe16},
+    PixelFormatDesc{"Y16", fourcc('Y', '1', '6', ' '), 16, Cfa::kNone, Packing::kLe16},
+    PixelFormatDesc{"Y10P", fourcc('Y', '1', '0', 'P'), 10, Cfa::kNone, Packing::kCsi2P10},
+    PixelFormatDesc{"YUYV", fourcc('Y', 'U', 'Y', 'V'), 8, Cfa::kNone, Packing::kYuyvLuma},
+    PixelFormatDesc{"SBGGR8", fourcc('B', 'A', '8', '1'), 8, Cfa::kBGGR, Packing::kBytes8},
+    PixelFormatDesc{"SGBRG8", fourcc('G', 'B', 'R', 'G'), 8, Cfa::kGBRG, Packing::kBytes8},
+    PixelFormatDesc{"SGRBG8", fourcc('G', 'R', 'B', 'G'), 8, Cfa::kGRBG, Packing::kBytes8},
+    PixelFormatDesc{"SRGGB8", fourcc('R', 'G', 'G', 'B'), 8, Cfa::kRGGB, Packing::kBytes8},
+    PixelFormatDesc{"SBGGR10", fourcc('B', 'G', '1', '0'), 10, Cfa::kBGGR, Packing::kLe16},
+    PixelFormatDesc{"SGBRG10", fourcc('G', 'B', '1', '0'), 10, Cfa::kGBRG, Packing::kLe16},
+    PixelFormatDesc{"SGRBG10", fourcc('B', 'A', '1', '0'), 10, Cfa::kGRBG, Packing::kLe16},
+    PixelFormatDesc{"SRGGB10", fourcc('R', 'G', '1', '0'), 10, Cfa::kRGGB, Packing::kLe16},
+    PixelFormatDesc{"SBGGR12", fourcc('B', 'G', '1', '2'), 12, Cfa::kBGGR, Packing::kLe16},
+    PixelFormatDesc{"SGBRG12", fourcc('G', 'B', '1', '2'), 12, Cfa::kGBRG, Packing::kLe16},
+    PixelFormatDesc{"SGRBG12", fourcc('B', 'A', '1', '2'), 12, Cfa::kGRBG, Packing::kLe16},
+    PixelFormatDesc{"SRGGB12", fourcc('R', 'G', '1', '2'), 12, Cfa::kRGGB, Packing::kLe16},
+    PixelFormatDesc{"SBGGR16", fourcc('B', 'Y', 'R', '2'), 16, Cfa::kBGGR, Packing::kLe16},
+    PixelFormatDesc{"SGBRG16", fourcc('G', 'B', '1', '6'), 16, Cfa::kGBRG, Packing::kLe16},
+    PixelFormatDesc{"SGRBG16", fourcc('G', 'R', '1', '6'), 16, Cfa::kGRBG, Packing::kLe16},
+    PixelFormatDesc{"SRGGB16", fourcc('R', 'G', '1', '6'), 16, Cfa::kRGGB, Packing::kLe16},
+    PixelFormatDesc{"SBGGR10P", fourcc('p', 'B', 'A', 'A'), 10, Cfa::kBGGR, Packing::kCsi2P10},
+    PixelFormatDesc{"SGBRG10P", fourcc('p', 'G', 'A', 'A'), 10, Cfa::kGBRG, Packing::kCsi2P10},
+    PixelFormatDesc{"SGRBG10P", fourcc('p', 'g', 'A', 'A'), 10, Cfa::kGRBG, Packing::kCsi2P10},
+    PixelFormatDesc{"SRGGB10P", fourcc('p', 'R', 'A', 'A'), 10, Cfa::kRGGB, Packing::kCsi2P10},
+    PixelFormatDesc{"SBGGR12P", fourcc('p', 'B', 'C', 'C'), 12, Cfa::kBGGR, Packing::kCsi2P12},
+    PixelFormatDesc{"SGBRG12P", fourcc('p', 'G', 'C', 'C'), 12, Cfa::kGBRG, Packing::kCsi2P12},
+    PixelFormatDesc{"SGRBG12P", fourcc('p', 'g', 'C', 'C'), 12, Cfa::kGRBG, Packing::kCsi2P12},
+    PixelFormatDesc{"SRGGB12P", fourcc('p', 'R', 'C', 'C'), 12, Cfa::kRGGB, Packing::kCsi2P12},
 };
 
 }  // namespace
@@ -66,15 +66,15 @@ const PixelFormatDesc* find_v4l2_pixel_format(std::uint32_t v4l2_fourcc) {
 std::size_t min_row_bytes(Packing packing, int width) {
   const auto w = static_cast<std::size_t>(width);
   switch (packing) {
-    case Packing::Bytes8:
+    case Packing::kBytes8:
       return w;
-    case Packing::Le16:
+    case Packing::kLe16:
       return 2 * w;
-    case Packing::Csi2P10:
+    case Packing::kCsi2P10:
       return (w * 5 + 3) / 4;
-    case Packing::Csi2P12:
+    case Packing::kCsi2P12:
       return (w * 3 + 1) / 2;
-    case Packing::YuyvLuma:
+    case Packing::kYuyvLuma:
       return 2 * w;
   }
   return 0;
@@ -94,30 +94,30 @@ cv::Mat unpack_pixels(std::span<const std::uint8_t> data, int width, int height,
     throw std::invalid_argument(fmt::format("buffer holds {} bytes, a {}x{} image with stride {} needs {}",
                                             data.size(), width, height, stride, needed));
   }
-  const bool eight_bit = packing == Packing::Bytes8 || packing == Packing::YuyvLuma;
+  const bool eight_bit = packing == Packing::kBytes8 || packing == Packing::kYuyvLuma;
   cv::Mat image(height, width, eight_bit ? CV_8UC1 : CV_16UC1);
   const std::uint16_t mask =
       bit_depth >= 16 ? std::uint16_t{0xffff} : static_cast<std::uint16_t>((1u << bit_depth) - 1);
   for (int y = 0; y < height; ++y) {
     const std::uint8_t* in = data.data() + stride * static_cast<std::size_t>(y);
     switch (packing) {
-      case Packing::Bytes8: {
+      case Packing::kBytes8: {
         std::copy(in, in + width, image.ptr<std::uint8_t>(y));
         break;
       }
-      case Packing::YuyvLuma: {
+      case Packing::kYuyvLuma: {
         auto* out = image.ptr<std::uint8_t>(y);
         for (int x = 0; x < width; ++x) out[x] = in[2 * x];
         break;
       }
-      case Packing::Le16: {
+      case Packing::kLe16: {
         auto* out = image.ptr<std::uint16_t>(y);
         for (int x = 0; x < width; ++x) {
           out[x] = static_cast<std::uint16_t>((in[2 * x] | in[2 * x + 1] << 8) & mask);
         }
         break;
       }
-      case Packing::Csi2P10: {
+      case Packing::kCsi2P10: {
         auto* out = image.ptr<std::uint16_t>(y);
         for (int x = 0; x < width; ++x) {
           const std::uint8_t* group = in + (x / 4) * 5;
@@ -126,7 +126,7 @@ cv::Mat unpack_pixels(std::span<const std::uint8_t> data, int width, int height,
         }
         break;
       }
-      case Packing::Csi2P12: {
+      case Packing::kCsi2P12: {
         auto* out = image.ptr<std::uint16_t>(y);
         for (int x = 0; x < width; ++x) {
           const std::uint8_t* group = in + (x / 2) * 3;

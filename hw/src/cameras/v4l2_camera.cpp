@@ -124,7 +124,7 @@ class V4l2Camera final : public camera::Camera {
   std::vector<camera::FormatInfo> formats() const override { return formats_; }
 
   std::vector<camera::TriggerMode> trigger_modes() const override {
-    return {camera::TriggerMode::FreeRun, camera::TriggerMode::Software, camera::TriggerMode::Hardware};
+    return {camera::TriggerMode::kFreeRun, camera::TriggerMode::kSoftware, camera::TriggerMode::kHardware};
   }
 
   camera::CameraConfig default_config() const override { return initial_config_; }
@@ -181,7 +181,7 @@ class V4l2Camera final : public camera::Camera {
       throw CameraError(fmt::format("{}: cannot configure while streaming; stop() first", uri()));
     camera::CameraConfig config = requested;
     const camera::Validation v = validate(config);
-    if (v.status != camera::ConfigStatus::Valid) {
+    if (v.status != camera::ConfigStatus::kValid) {
       throw CameraError(fmt::format("{}: configuration is {} ({}); call validate() and apply what it returns",
                                     uri(), camera::to_string(v.status), v.message()));
     }
@@ -224,10 +224,10 @@ class V4l2Camera final : public camera::Camera {
   camera::Controls set_controls(const camera::Controls& controls) override {
     if (controls.exposure_us) {
       const Ctrl* e = exposure_ctrl();
-      if (!e) throw CameraError(Kind::Unsupported, fmt::format("{}: has no exposure control", uri()));
+      if (!e) throw CameraError(Kind::kUnsupported, fmt::format("{}: has no exposure control", uri()));
       const double unit = exposure_unit_us();
       if (unit <= 0) {
-        throw CameraError(Kind::Unsupported,
+        throw CameraError(Kind::kUnsupported,
                           fmt::format("{}: V4L2_CID_EXPOSURE counts device units (lines) and the node has no "
                                       "V4L2_CID_PIXEL_RATE/V4L2_CID_HBLANK to convert microseconds; give the "
                                       "line time in the URI, e.g. {}?exposure_unit_us=14.7",
@@ -243,7 +243,7 @@ class V4l2Camera final : public camera::Camera {
     }
     if (controls.analogue_gain) {
       const Ctrl* g = gain_ctrl();
-      if (!g) throw CameraError(Kind::Unsupported, fmt::format("{}: has no gain control", uri()));
+      if (!g) throw CameraError(Kind::kUnsupported, fmt::format("{}: has no gain control", uri()));
       if (auto_gain_.present) set_ctrl(auto_gain_, 0, "V4L2_CID_AUTOGAIN");
       const double unity = gain_unity();
       const std::int32_t code =
@@ -306,7 +306,7 @@ class V4l2Camera final : public camera::Camera {
   void trigger() override {
     check_software_trigger(config_, streaming_, uri());
     trigger_pending_ = true;
-    trigger_time_ns_ = camera::clock_now_ns(camera::ClockDomain::Monotonic);
+    trigger_time_ns_ = camera::clock_now_ns(camera::ClockDomain::kMonotonic);
     frames_since_trigger_ = 0;
   }
 
@@ -331,7 +331,7 @@ class V4l2Camera final : public camera::Camera {
       if (const int err = xioctl(VIDIOC_DQBUF, &buf)) {
         if (err == EAGAIN) {
           if (p.revents & (POLLERR | POLLHUP)) {
-            throw CameraError(Kind::Disconnected,
+            throw CameraError(Kind::kDisconnected,
                               fmt::format("{}: the device reports an error (poll)", uri()));
           }
           continue;
@@ -351,7 +351,7 @@ class V4l2Camera final : public camera::Camera {
     if (fd_ < 0) {
       const int err = errno;
       if (err == ENOENT || err == ENXIO || err == ENODEV) {
-        throw CameraError(Kind::NotFound,
+        throw CameraError(Kind::kNotFound,
                           fmt::format("{}: no such device ({}); `lightstage devices` lists the "
                                       "cameras this machine sees",
                                       uri(), std::strerror(err)));
@@ -362,14 +362,14 @@ class V4l2Camera final : public camera::Camera {
                         "(see hw/docs/cameras.md)",
                         uri(), path_));
       }
-      if (err == EBUSY) throw CameraError(Kind::Busy, fmt::format("{}: device busy", uri()));
+      if (err == EBUSY) throw CameraError(Kind::kBusy, fmt::format("{}: device busy", uri()));
       throw CameraError(fmt::format("{}: cannot open {}: {}", uri(), path_, std::strerror(err)));
     }
     v4l2_capability cap{};
     if (const int err = xioctl(VIDIOC_QUERYCAP, &cap)) {
       sys_->close(fd_);
       if (err == ENOTTY || err == EINVAL) {
-        throw CameraError(Kind::Unsupported, fmt::format("{}: {} is not a V4L2 device", uri(), path_));
+        throw CameraError(Kind::kUnsupported, fmt::format("{}: {} is not a V4L2 device", uri(), path_));
       }
       throw CameraError(fmt::format("{}: VIDIOC_QUERYCAP failed: {}", uri(), std::strerror(err)));
     }
@@ -387,8 +387,8 @@ class V4l2Camera final : public camera::Camera {
     }
     if (!missing.empty()) {
       sys_->close(fd_);
-      throw CameraError(Kind::Unsupported, fmt::format("{}: {} ({}, driver {}) lacks {}", uri(), path_, card_,
-                                                       driver_, missing));
+      throw CameraError(Kind::kUnsupported, fmt::format("{}: {} ({}, driver {}) lacks {}", uri(), path_,
+                                                        card_, driver_, missing));
     }
   }
 
@@ -443,7 +443,7 @@ class V4l2Camera final : public camera::Camera {
       std::string offered;
       for (const auto& f : unknown_formats_) offered += (offered.empty() ? "" : ", ") + f;
       throw CameraError(
-          Kind::Unsupported,
+          Kind::kUnsupported,
           fmt::format("{}: offers no pixel format Lightstage can unpack (offers: {}; wanted GREY, "
                       "Y10, Y12, Y16, YUYV or Bayer 8/10/12/16)",
                       uri(), offered.empty() ? "none" : offered));
@@ -634,20 +634,20 @@ class V4l2Camera final : public camera::Camera {
     if (buf.flags & V4L2_BUF_FLAG_ERROR) return std::nullopt;  // corrupt: the gap in sequence shows it
 
     const auto clock = (buf.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC
-                           ? camera::ClockDomain::Monotonic
-                           : camera::ClockDomain::Unknown;
+                           ? camera::ClockDomain::kMonotonic
+                           : camera::ClockDomain::kUnknown;
     const auto point = (buf.flags & V4L2_BUF_FLAG_TSTAMP_SRC_MASK) == V4L2_BUF_FLAG_TSTAMP_SRC_SOE
-                           ? camera::TimestampPoint::StartOfExposure
-                           : camera::TimestampPoint::EndOfFrame;
-    if (config_.trigger == camera::TriggerMode::Software) {
+                           ? camera::TimestampPoint::kStartOfExposure
+                           : camera::TimestampPoint::kEndOfFrame;
+    if (config_.trigger == camera::TriggerMode::kSoftware) {
       if (!trigger_pending_) return std::nullopt;
       ++frames_since_trigger_;
-      if (clock == camera::ClockDomain::Monotonic) {
+      if (clock == camera::ClockDomain::kMonotonic) {
         // The earliest the exposure can have begun: a start-of-exposure stamp
         // is exact; an end-of-frame stamp is at most exposure + one frame
         // interval (readout) after it.
         std::int64_t start = ts;
-        if (point == camera::TimestampPoint::EndOfFrame) {
+        if (point == camera::TimestampPoint::kEndOfFrame) {
           start -= static_cast<std::int64_t>(exposure_us_ * 1000.0);
           start -= previous_ts > 0 && ts > previous_ts ? ts - previous_ts : 0;
         }
@@ -685,11 +685,11 @@ class V4l2Camera final : public camera::Camera {
   [[noreturn]] void fail_errno(const std::string& what, int err) {
     if (err == ENODEV) {
       streaming_ = false;
-      throw CameraError(Kind::Disconnected,
+      throw CameraError(Kind::kDisconnected,
                         fmt::format("{}: device disconnected ({}: {})", uri(), what, std::strerror(err)));
     }
     if (err == EBUSY)
-      throw CameraError(Kind::Busy,
+      throw CameraError(Kind::kBusy,
                         fmt::format("{}: {}: device busy (another process streaming?)", uri(), what));
     throw CameraError(fmt::format("{}: {} failed: {}", uri(), what, std::strerror(err)));
   }

@@ -48,7 +48,7 @@ class SimCamera final : public camera::Camera {
   }
 
   std::vector<camera::TriggerMode> trigger_modes() const override {
-    return {camera::TriggerMode::FreeRun, camera::TriggerMode::Software, camera::TriggerMode::Hardware};
+    return {camera::TriggerMode::kFreeRun, camera::TriggerMode::kSoftware, camera::TriggerMode::kHardware};
   }
 
   camera::CameraConfig default_config() const override {
@@ -63,7 +63,7 @@ class SimCamera final : public camera::Camera {
     const camera::CameraConfig d = default_config();
     const auto adjust = [&](const std::string& note) {
       v.notes.push_back(note);
-      if (v.status == camera::ConfigStatus::Valid) v.status = camera::ConfigStatus::Adjusted;
+      if (v.status == camera::ConfigStatus::kValid) v.status = camera::ConfigStatus::kAdjusted;
     };
     if (config.pixel_format.empty()) config.pixel_format = d.pixel_format;
     if (config.pixel_format != d.pixel_format) {
@@ -82,7 +82,7 @@ class SimCamera final : public camera::Camera {
           r.y + r.height > d.size.height) {
         v.notes.push_back(fmt::format("roi {}x{}+{}+{} is outside the {}x{} frame", r.width, r.height, r.x,
                                       r.y, d.size.width, d.size.height));
-        v.status = camera::ConfigStatus::Invalid;
+        v.status = camera::ConfigStatus::kInvalid;
       }
     }
     return v;
@@ -91,14 +91,14 @@ class SimCamera final : public camera::Camera {
   void configure(const camera::CameraConfig& config) override {
     camera::CameraConfig checked = config;
     const camera::Validation v = validate(checked);
-    if (v.status != camera::ConfigStatus::Valid) {
+    if (v.status != camera::ConfigStatus::kValid) {
       throw CameraError(fmt::format("{}: configuration not valid: {}", uri(), v.message()));
     }
     pb::ClientMessage m;
     auto* c = m.mutable_configure();
-    c->set_trigger(config.trigger == camera::TriggerMode::Hardware   ? pb::HARDWARE
-                   : config.trigger == camera::TriggerMode::Software ? pb::SOFTWARE
-                                                                     : pb::FREE_RUN);
+    c->set_trigger(config.trigger == camera::TriggerMode::kHardware   ? pb::HARDWARE
+                   : config.trigger == camera::TriggerMode::kSoftware ? pb::SOFTWARE
+                                                                      : pb::FREE_RUN);
     if (config.roi) {
       c->set_roi_x(static_cast<std::uint32_t>(config.roi->x));
       c->set_roi_y(static_cast<std::uint32_t>(config.roi->y));
@@ -161,8 +161,8 @@ class SimCamera final : public camera::Camera {
   bool streaming() const override { return streaming_; }
 
   void trigger() override {
-    if (config_.trigger != camera::TriggerMode::Software) {
-      throw CameraError(camera::CameraError::Kind::Unsupported,
+    if (config_.trigger != camera::TriggerMode::kSoftware) {
+      throw CameraError(camera::CameraError::Kind::kUnsupported,
                         fmt::format("{}: trigger() needs software trigger mode", uri()));
     }
     pb::ClientMessage m;
@@ -192,7 +192,7 @@ class SimCamera final : public camera::Camera {
       return channel_.receive(m, timeout);
     } catch (const LinkClosed& e) {
       streaming_ = false;
-      throw CameraError(camera::CameraError::Kind::Disconnected, fmt::format("{}: {}", uri(), e.what()));
+      throw CameraError(camera::CameraError::Kind::kDisconnected, fmt::format("{}: {}", uri(), e.what()));
     } catch (const ProtocolError& e) {
       throw CameraError(fmt::format("{}: {}", uri(), e.what()));
     }
@@ -212,7 +212,7 @@ class SimCamera final : public camera::Camera {
     try {
       channel_.send(m);
     } catch (const LinkClosed& e) {
-      throw CameraError(camera::CameraError::Kind::Disconnected, fmt::format("{}: {}", uri(), e.what()));
+      throw CameraError(camera::CameraError::Kind::kDisconnected, fmt::format("{}: {}", uri(), e.what()));
     }
     const auto deadline = std::chrono::steady_clock::now() + kReplyTimeout;
     for (;;) {
@@ -220,7 +220,7 @@ class SimCamera final : public camera::Camera {
           std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
       pb::ServerMessage reply;
       if (left.count() <= 0 || !receive(reply, left)) {
-        throw CameraError(camera::CameraError::Kind::Timeout,
+        throw CameraError(camera::CameraError::Kind::kTimeout,
                           fmt::format("{}: no reply from the sim", uri()));
       }
       if (reply.request_id() != m.request_id()) {
@@ -245,8 +245,8 @@ class SimCamera final : public camera::Camera {
     frame.bit_depth = static_cast<int>(f.bit_depth());
     frame.sequence = f.sequence();
     frame.timestamp_ns = f.timestamp_ns();
-    frame.clock = camera::ClockDomain::Monotonic;
-    frame.timestamp_point = camera::TimestampPoint::StartOfExposure;
+    frame.clock = camera::ClockDomain::kMonotonic;
+    frame.timestamp_point = camera::TimestampPoint::kStartOfExposure;
     frame.exposure_us = f.exposure_us();
     frame.analogue_gain = f.analogue_gain();
     frame.controls_reported = true;
@@ -270,7 +270,7 @@ std::unique_ptr<camera::Camera> open_sim_camera(const std::string& socket_path) 
     link = connect_socket_link("unix:" + socket_path, std::chrono::milliseconds(2000));
   } catch (const LinkClosed& e) {
     throw camera::CameraError(
-        camera::CameraError::Kind::NotFound,
+        camera::CameraError::Kind::kNotFound,
         fmt::format("{}: no virtual camera there (is lightstage-sim running with --camera?): {}", uri,
                     e.what()));
   }

@@ -9,7 +9,7 @@
 //   auto cam = open_camera("v4l2:/dev/video0");     // hw::open_camera registers hw's schemes
 //   CameraConfig config = cam->default_config();
 //   config.pixel_format = "SRGGB12";
-//   if (cam->validate(config).status == ConfigStatus::Invalid) ...   // adjusted in place
+//   if (cam->validate(config).status == ConfigStatus::kInvalid) ...   // adjusted in place
 //   cam->configure(config);                          // only a Valid configuration is applied
 //   cam->set_controls({.exposure_us = 8000, .analogue_gain = 1.0});
 //   cam->start();
@@ -46,15 +46,15 @@ namespace lightstage::camera {
 class CameraError : public Error {
  public:
   enum class Kind {
-    Failed,        // an operation the device refused (the message says which and why)
-    Timeout,       // no frame within the time asked for
-    Disconnected,  // the device went away (unplugged, driver unbound, ENODEV)
-    Busy,          // another process holds the camera
-    NotFound,      // no such device / camera id
-    Unsupported,   // this camera cannot do what was asked
+    kFailed,        // an operation the device refused (the message says which and why)
+    kTimeout,       // no frame within the time asked for
+    kDisconnected,  // the device went away (unplugged, driver unbound, ENODEV)
+    kBusy,          // another process holds the camera
+    kNotFound,      // no such device / camera id
+    kUnsupported,   // this camera cannot do what was asked
   };
   CameraError(Kind kind, const std::string& message) : Error(message), kind_(kind) {}
-  explicit CameraError(const std::string& message) : CameraError(Kind::Failed, message) {}
+  explicit CameraError(const std::string& message) : CameraError(Kind::kFailed, message) {}
   Kind kind() const { return kind_; }
 
  private:
@@ -70,7 +70,7 @@ std::string_view to_string(CameraError::Kind kind);
 // the driver sets V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC); libcamera documents its
 // SensorTimestamp as CLOCK_BOOTTIME; libgpiod edge events are CLOCK_MONOTONIC.
 // MONOTONIC and BOOTTIME differ by the time the system spent suspended.
-enum class ClockDomain { Monotonic, Boottime, Realtime, Unknown };
+enum class ClockDomain { kMonotonic, kBoottime, kRealtime, kUnknown };
 
 std::string_view to_string(ClockDomain domain);
 
@@ -106,7 +106,7 @@ struct Roi {
 // The colour filter over the top-left 2x2 pixels of a raw image, read row by
 // row ("RGGB": R at (0,0), G at (0,1), G at (1,0), B at (1,1)); None for
 // monochrome and for already-demosaicked images.
-enum class Cfa { None, RGGB, BGGR, GRBG, GBRG };
+enum class Cfa { kNone, kRGGB, kBGGR, kGRBG, kGBRG };
 
 std::string_view to_string(Cfa cfa);
 
@@ -122,7 +122,7 @@ Cfa cfa_at(Cfa cfa, int x, int y);
 struct FormatInfo {
   std::string pixel_format;
   int bit_depth = 8;
-  Cfa cfa = Cfa::None;
+  Cfa cfa = Cfa::kNone;
   std::string description;  // e.g. "12-bit Bayer RGGB, unpacked" or the driver's text
   // Frame sizes: each entry a range [min, max] in steps; a discrete size has
   // min == max.
@@ -136,9 +136,9 @@ struct FormatInfo {
 };
 
 enum class TriggerMode {
-  FreeRun,   // the sensor streams at its own rate; every frame is delivered
-  Software,  // trigger() starts an exposure; the first frame exposed wholly after it is delivered
-  Hardware,  // the sensor exposes on an edge of its trigger input (wired to the controller)
+  kFreeRun,   // the sensor streams at its own rate; every frame is delivered
+  kSoftware,  // trigger() starts an exposure; the first frame exposed wholly after it is delivered
+  kHardware,  // the sensor exposes on an edge of its trigger input (wired to the controller)
 };
 
 std::string_view to_string(TriggerMode mode);
@@ -149,15 +149,15 @@ struct CameraConfig {
   Size size;
   std::optional<Roi> roi;  // a crop of `size`; frames are roi-sized
   int buffer_count = 4;
-  TriggerMode trigger = TriggerMode::FreeRun;
+  TriggerMode trigger = TriggerMode::kFreeRun;
 };
 
-enum class ConfigStatus { Valid, Adjusted, Invalid };
+enum class ConfigStatus { kValid, kAdjusted, kInvalid };
 
 std::string_view to_string(ConfigStatus status);
 
 struct Validation {
-  ConfigStatus status = ConfigStatus::Valid;
+  ConfigStatus status = ConfigStatus::kValid;
   std::vector<std::string> notes;  // one line per adjustment or problem, naming field and value
   std::string message() const;     // the notes joined with "; "
 };
@@ -187,7 +187,7 @@ struct ControlInfo {
 // Frames
 
 // Where in the frame's life its timestamp was taken.
-enum class TimestampPoint { StartOfExposure, EndOfFrame, Unknown };
+enum class TimestampPoint { kStartOfExposure, kEndOfFrame, kUnknown };
 
 std::string_view to_string(TimestampPoint point);
 
@@ -195,11 +195,11 @@ struct Frame {
   cv::Mat image;  // CV_8UC1 or CV_16UC1, owned by the frame
   std::string pixel_format;
   int bit_depth = 8;
-  Cfa cfa = Cfa::None;
+  Cfa cfa = Cfa::kNone;
   std::uint64_t sequence = 0;  // the device's frame counter; a gap means frames were lost
   std::int64_t timestamp_ns = 0;
-  ClockDomain clock = ClockDomain::Unknown;
-  TimestampPoint timestamp_point = TimestampPoint::Unknown;
+  ClockDomain clock = ClockDomain::kUnknown;
+  TimestampPoint timestamp_point = TimestampPoint::kUnknown;
   double exposure_us = 0;
   double analogue_gain = 1;
   // True when the device reported exposure and gain for this very frame;
@@ -259,10 +259,10 @@ class Camera {
 
   // The next frame, or nullopt when none arrives within `timeout` (in Hardware
   // trigger mode that is normal between triggers). Throws CameraError when not
-  // streaming or when the device fails (Kind::Disconnected when it went away).
+  // streaming or when the device fails (Kind::kDisconnected when it went away).
   virtual std::optional<Frame> wait_frame(std::chrono::milliseconds timeout) = 0;
 
-  // wait_frame, with a timeout being an error (Kind::Timeout, naming the URI).
+  // wait_frame, with a timeout being an error (Kind::kTimeout, naming the URI).
   Frame capture(std::chrono::milliseconds timeout);
 
  protected:

@@ -18,11 +18,11 @@ namespace lightstage::hw {
 
 // How pixels sit in the buffer.
 enum class Packing {
-  Bytes8,    // one byte per pixel
-  Le16,      // little-endian 16-bit words, value in the low bit_depth bits (Y10, Y12, SRGGB12, ...)
-  Csi2P10,   // MIPI CSI-2 RAW10: 4 pixels in 5 bytes (4 high bytes, then the 2-bit remainders)
-  Csi2P12,   // MIPI CSI-2 RAW12: 2 pixels in 3 bytes (2 high bytes, then the 4-bit remainders)
-  YuyvLuma,  // YUYV 4:2:2; the Y samples become a grey image
+  kBytes8,    // one byte per pixel
+  kLe16,      // little-endian 16-bit words, value in the low bit_depth bits (Y10, Y12, SRGGB12, ...)
+  kCsi2P10,   // MIPI CSI-2 RAW10: 4 pixels in 5 bytes (4 high bytes, then the 2-bit remainders)
+  kCsi2P12,   // MIPI CSI-2 RAW12: 2 pixels in 3 bytes (2 high bytes, then the 4-bit remainders)
+  kYuyvLuma,  // YUYV 4:2:2; the Y samples become a grey image
 };
 
 constexpr std::uint32_t fourcc(char a, char b, char c, char d) {

@@ -21,7 +21,7 @@ struct StepTiming {
 
 struct FrameTiming {
   std::int64_t timestamp_ns = 0;  // already on CLOCK_MONOTONIC
-  camera::TimestampPoint point = camera::TimestampPoint::Unknown;
+  camera::TimestampPoint point = camera::TimestampPoint::kUnknown;
   std::uint64_t sequence = 0;
 };
 
