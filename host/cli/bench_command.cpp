@@ -104,8 +104,8 @@ void add_bench(CLI::App& app) {
     args->sweep.noise = parse_noise_list(args->noise);
     args->sweep.check();
     Progress progress("bench materials", args->sweep.cells(), "runs", args->output.mode());
-    const pipeline::MaterialSweepResult result =
-        pipeline::run_material_sweep(args->sweep, [&progress](std::size_t cells) { progress.advance(cells); });
+    const pipeline::MaterialSweepResult result = pipeline::run_material_sweep(
+        args->sweep, [&progress](std::size_t cells) { progress.advance(cells); });
     progress.finish();
     nlohmann::json outputs = nlohmann::json::object();
     if (!args->out.empty()) {

@@ -2,12 +2,11 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
-#include "lightstage/sim/scene_file.hpp"
 #include "lightstage/pipeline/solve_methods.hpp"
+#include "lightstage/sim/scene_file.hpp"
 #include "shape_prior_args.hpp"
 
 #include <fmt/format.h>
-
 
 namespace lightstage::cli {
 
@@ -82,7 +81,8 @@ void add_simulate_flags(CLI::App& sub, SimulateArgs& args) {
 
 void add_solve_flags(CLI::App& sub, pipeline::SolveSettings& args) {
   std::string methods;
-  for (const auto& method : pipeline::solve_methods()) methods += fmt::format("\n  {}: {}", method.name, method.help);
+  for (const auto& method : pipeline::solve_methods())
+    methods += fmt::format("\n  {}: {}", method.name, method.help);
   sub.add_option("--method", args.method, "solver (docs/solvers.md):" + methods)
       ->check(CLI::IsMember(pipeline::solve_method_names()))
       ->capture_default_str();

@@ -1,6 +1,5 @@
 #include "shape_prior_args.hpp"
 
-
 namespace lightstage::cli {
 
 void add_shape_prior_flags(CLI::App& sub, pipeline::ShapePriorSettings& args) {

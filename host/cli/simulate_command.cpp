@@ -6,8 +6,8 @@
 #include "lightstage/common/log.hpp"
 #include "lightstage/common/rig.hpp"
 #include "lightstage/host/progress.hpp"
-#include "lightstage/sim/scene_file.hpp"
 #include "lightstage/pipeline/simulate_folder.hpp"
+#include "lightstage/sim/scene_file.hpp"
 #include "options.hpp"
 
 #include <fmt/format.h>
@@ -124,14 +124,15 @@ void add_simulate(CLI::App& app) {
     if (args->natural.lighting == "natural") {
       Progress progress("simulate", static_cast<std::size_t>(args->natural.frames), "frames",
                         args->output.mode());
-      summary = pipeline::simulate_natural_to_folder(args->rig, args->sim.options, args->natural, args->out,
-                                                     [&progress](std::size_t frames) { progress.advance(frames); });
+      summary =
+          pipeline::simulate_natural_to_folder(args->rig, args->sim.options, args->natural, args->out,
+                                               [&progress](std::size_t frames) { progress.advance(frames); });
       progress.finish();
     } else {
       const Rig rig = load_rig(args->rig);
       Progress progress("simulate", rig.leds.size(), "frames", args->output.mode());
       summary = pipeline::simulate_to_folder(args->rig, args->sim.options, args->out,
-                                   [&progress](std::size_t frames) { progress.advance(frames); });
+                                             [&progress](std::size_t frames) { progress.advance(frames); });
       progress.finish();
       summary["lighting"] = "dome";
     }

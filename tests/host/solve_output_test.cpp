@@ -94,7 +94,9 @@ TEST(HostSolveFolder, AlbedoFallsBackToThePngTimesItsScale) {
   for (int y = 0; y < result.albedo.rows; ++y) {
     for (int x = 0; x < result.albedo.cols; ++x) {
       const float a = result.albedo.at<float>(y, x);
-      if (a < scale) EXPECT_NEAR(folder.albedo.at<float>(y, x), a, scale / 65535.0) << x << "," << y;
+      if (a < scale) {
+        EXPECT_NEAR(folder.albedo.at<float>(y, x), a, scale / 65535.0) << x << "," << y;
+      }
     }
   }
 }

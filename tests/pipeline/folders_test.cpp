@@ -1,9 +1,9 @@
 // The folder-to-folder steps in process: simulate a stack, solve it, read the
 // solve folder back, integrate a surface from it and relight it.
 #include "lightstage/common/error.hpp"
+#include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/normal_map.hpp"
 #include "lightstage/host/io/solve_output.hpp"
-#include "lightstage/host/io/image_io.hpp"
 #include "lightstage/pipeline/integrate_folder.hpp"
 #include "lightstage/pipeline/relight_folder.hpp"
 #include "lightstage/pipeline/simulate_folder.hpp"

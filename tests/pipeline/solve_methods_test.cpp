@@ -17,16 +17,17 @@ using ::testing::HasSubstr;
 SyntheticScene lambert_scene() {
   SyntheticOptions options;
   options.scale = 0.5;
-  return render_synthetic(sim::parse_material("lambert"), cv::Size(12, 8),
-                          [](int x, int y) {
-                            return direction_from_elevation_azimuth(rad_from_deg(20 + 8.0 * y), rad_from_deg(30.0 * x));
-                          },
-                          random_hemisphere_lights(40, 0.1, 5), options);
+  return render_synthetic(
+      sim::parse_material("lambert"), cv::Size(12, 8),
+      [](int x, int y) {
+        return direction_from_elevation_azimuth(rad_from_deg(20 + 8.0 * y), rad_from_deg(30.0 * x));
+      },
+      random_hemisphere_lights(40, 0.1, 5), options);
 }
 
 TEST(SolveMethods, ListsEveryMethodInHelpOrder) {
-  EXPECT_THAT(solve_method_names(), ElementsAre("l2", "robust", "monotonic", "bilinear", "biquadratic", "bicubic",
-                                                "auto", "shape-prior"));
+  EXPECT_THAT(solve_method_names(), ElementsAre("l2", "robust", "monotonic", "bilinear", "biquadratic",
+                                                "bicubic", "auto", "shape-prior"));
   for (const auto& method : solve_methods()) EXPECT_FALSE(method.help.empty()) << method.name;
 }
 
@@ -83,12 +84,13 @@ TEST(SolveMethods, ShapePriorWithoutAPriorNamesTheFlag) {
 }
 
 TEST(SolveMethods, ARegisteredMethodIsFoundAndSolvesWithTheSettings) {
-  register_solve_method({"test-flat", "every normal faces the camera", [](const Observations& obs, const SolveSettings& s) {
-                           SolveResult result = solve_lambertian(obs, s.l2);
-                           result.normals.setTo(cv::Scalar(0, 0, 1), result.solved);
-                           result.summary.method = "test-flat";
-                           return result;
-                         }});
+  register_solve_method(
+      {"test-flat", "every normal faces the camera", [](const Observations& obs, const SolveSettings& s) {
+         SolveResult result = solve_lambertian(obs, s.l2);
+         result.normals.setTo(cv::Scalar(0, 0, 1), result.solved);
+         result.summary.method = "test-flat";
+         return result;
+       }});
   EXPECT_EQ(solve_method_names().back(), "test-flat");
   SolveSettings settings;
   settings.method = "test-flat";
@@ -146,7 +148,8 @@ TEST(SolveSettings, FalloffParsesAutoAndNumbersInRange) {
   EXPECT_FALSE(parse_falloff("auto").has_value());
   EXPECT_EQ(parse_falloff("+0.3"), 0.3);
   EXPECT_EQ(parse_falloff("0"), 0.0);
-  for (const char* bad : {"7", "-0.51", "steep", "", "inf", "0.3x"}) EXPECT_THROW(parse_falloff(bad), InputError) << bad;
+  for (const char* bad : {"7", "-0.51", "steep", "", "inf", "0.3x"})
+    EXPECT_THROW(parse_falloff(bad), InputError) << bad;
 }
 
 TEST(SolveWork, CountsPixelsPassesAndEvaluations) {

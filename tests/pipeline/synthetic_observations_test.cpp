@@ -61,13 +61,15 @@ TEST(RenderSynthetic, NormalisesToThePeakAndQuantisesNoisyValues) {
   const sim::Material material = sim::parse_material("blinn-phong:shininess=50,ks=0.5");
   const Eigen::MatrixX3d lights = random_hemisphere_lights(50, 0.05, 3);
   SyntheticOptions exact;
-  const SyntheticScene clean = render_synthetic(material, sweep_grid_size(), sweep_grid_normal, lights, exact);
+  const SyntheticScene clean =
+      render_synthetic(material, sweep_grid_size(), sweep_grid_normal, lights, exact);
   EXPECT_NEAR(clean.observations.intensities.maxCoeff(), 1.0f, 1e-6);
 
   SyntheticOptions noisy;
   noisy.noise = 0.15;
   noisy.seed = 4;
-  const SyntheticScene scene = render_synthetic(material, sweep_grid_size(), sweep_grid_normal, lights, noisy);
+  const SyntheticScene scene =
+      render_synthetic(material, sweep_grid_size(), sweep_grid_normal, lights, noisy);
   const auto& values = scene.observations.intensities;
   int saturated = 0, changed = 0;
   for (Eigen::Index p = 0; p < values.rows(); ++p) {
@@ -82,7 +84,8 @@ TEST(RenderSynthetic, NormalisesToThePeakAndQuantisesNoisyValues) {
   EXPECT_GT(saturated, 0);  // the noise lifts the brightest values past full scale
   EXPECT_GT(changed, values.size() / 2);
   // The same seed gives the same noise.
-  EXPECT_EQ(values, render_synthetic(material, sweep_grid_size(), sweep_grid_normal, lights, noisy).observations.intensities);
+  EXPECT_EQ(values, render_synthetic(material, sweep_grid_size(), sweep_grid_normal, lights, noisy)
+                        .observations.intensities);
 }
 
 }  // namespace

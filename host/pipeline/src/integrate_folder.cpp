@@ -43,7 +43,9 @@ IntegrateReport integrate_folder(const IntegrateSettings& a, const surface::Surf
   if (cv::countNonZero(mask) == 0) fail("{}: no pixel has both a normal and the mask", normals_path.string());
   const std::filesystem::path albedo_path =
       a.albedo.empty() && folder ? folder->dir / "albedo" : std::filesystem::path(a.albedo);
-  const cv::Mat albedo = !a.albedo.empty() ? read_albedo(a.albedo) : folder ? folder->display_albedo() : cv::Mat();
+  const cv::Mat albedo = !a.albedo.empty() ? read_albedo(a.albedo)
+                         : folder          ? folder->display_albedo()
+                                           : cv::Mat();
   if (!albedo.empty() && albedo.size() != mask.size())
     fail("{}: albedo is {}x{} but the normals are {}x{}", albedo_path.string(), albedo.cols, albedo.rows,
          mask.cols, mask.rows);

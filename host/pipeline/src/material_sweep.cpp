@@ -116,9 +116,9 @@ MaterialSweepResult run_material_sweep(const MaterialSweepOptions& given,
                            options.noise.size(), std::vector<std::vector<double>>(
                                                      materials.size(), std::vector<double>(methods, 0.0))));
   for (std::size_t li = 0; li < options.light_counts.size(); ++li) {
-    const Eigen::MatrixX3d lights =
-        random_hemisphere_lights(options.light_counts[li],
-                                 std::max(std::cos(rad_from_deg(options.light_cone_deg)), 0.05), options.seed);
+    const Eigen::MatrixX3d lights = random_hemisphere_lights(
+        options.light_counts[li], std::max(std::cos(rad_from_deg(options.light_cone_deg)), 0.05),
+        options.seed);
     for (std::size_t ni = 0; ni < options.noise.size(); ++ni) {
       for (std::size_t mi = 0; mi < materials.size(); ++mi) {
         SyntheticOptions render;

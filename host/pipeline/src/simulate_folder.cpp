@@ -1,8 +1,8 @@
 #include "lightstage/pipeline/simulate_folder.hpp"
 
+#include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
 #include "lightstage/common/rig.hpp"
-#include "lightstage/common/error.hpp"
 #include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/io/stack_io.hpp"
 #include "lightstage/sim/natural_capture.hpp"
@@ -26,7 +26,8 @@ sim::NaturalLightingKind parse_environment(const std::string& text) {
 
 nlohmann::json simulate_natural_to_folder(const std::filesystem::path& rig_path,
                                           const sim::SimulateOptions& options, const NaturalSimulation& args,
-                                          const std::filesystem::path& out, const sim::FrameProgress& on_frames) {
+                                          const std::filesystem::path& out,
+                                          const sim::FrameProgress& on_frames) {
   options.check();
   const Rig rig = load_rig(rig_path);
   sim::NaturalCaptureOptions capture;
@@ -96,7 +97,6 @@ nlohmann::json simulate_natural_to_folder(const std::filesystem::path& rig_path,
                        out.string());
   return summary;
 }
-
 
 nlohmann::json simulate_to_folder(const std::filesystem::path& rig_path, const sim::SimulateOptions& options,
                                   const std::filesystem::path& out, const sim::FrameProgress& on_frames) {

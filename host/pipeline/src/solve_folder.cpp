@@ -33,8 +33,7 @@ SolveInput load_solve_input(const std::filesystem::path& input, const Radiometry
   prepared.observations = make_observations(stack, radiometry);
   prepared.ground_truth = std::move(stack.ground_truth);
   if (applied) {
-    const bool near =
-        !calibration.distant && calibration::set_near_lights(*applied, prepared.observations);
+    const bool near = !calibration.distant && calibration::set_near_lights(*applied, prepared.observations);
     prepared.calibration = applied->describe();
     prepared.calibration["near_lights"] = near;
   }

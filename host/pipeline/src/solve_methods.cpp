@@ -46,7 +46,9 @@ std::vector<SolveMethod>& registry() {
        [](const Observations& obs, const SolveSettings& s) { return solve_auto(obs, s.automatic); }},
       {"shape-prior",
        "unknown general lighting and camera response, with a depth prior (Algorithm 3; --prior)",
-       [](const Observations& obs, const SolveSettings& s) { return solve_with_shape_prior(obs, s.shape_prior); }},
+       [](const Observations& obs, const SolveSettings& s) {
+         return solve_with_shape_prior(obs, s.shape_prior);
+       }},
   };
   return methods;
 }
@@ -69,7 +71,8 @@ const SolveMethod& find_solve_method(const std::string& name) {
 }
 
 void register_solve_method(SolveMethod method) {
-  if (method.name.empty() || !method.solve) fail("register_solve_method: a method needs a name and a function");
+  if (method.name.empty() || !method.solve)
+    fail("register_solve_method: a method needs a name and a function");
   for (const auto& known : solve_methods()) {
     if (known.name == method.name) fail("register_solve_method: '{}' is already a method", method.name);
   }

@@ -56,7 +56,9 @@ py::dict stack_dict(const fs::path& path) {
   return out;
 }
 
-py::object optional_map(const cv::Mat& map) { return map.empty() ? py::object(py::none()) : py::object(to_numpy(map)); }
+py::object optional_map(const cv::Mat& map) {
+  return map.empty() ? py::object(py::none()) : py::object(to_numpy(map));
+}
 
 py::dict result_dict(const SolveResult& result, const std::optional<AngularErrorStats>& error) {
   py::dict out;
@@ -87,7 +89,8 @@ py::dict solve(const fs::path& input, const std::string& method, const std::opti
   std::optional<AngularErrorStats> error;
   {
     py::gil_scoped_release unlocked;  // the solve is long and touches no Python object
-    const pipeline::SolveInput prepared = pipeline::load_solve_input(input, settings.radiometry, light_calibration);
+    const pipeline::SolveInput prepared =
+        pipeline::load_solve_input(input, settings.radiometry, light_calibration);
     result = pipeline::solve_with(prepared.observations, settings);
     if (prepared.ground_truth && !prepared.ground_truth->normals.empty())
       error = angular_error(result.normals, prepared.ground_truth->normals, prepared.observations.mask).stats;
@@ -95,8 +98,8 @@ py::dict solve(const fs::path& input, const std::string& method, const std::opti
   return result_dict(result, error);
 }
 
-py::dict integrate(const py::array& normals_array, const std::optional<py::array>& mask_array, double pixel_mm,
-                   const std::string& method, bool preserve_discontinuities) {
+py::dict integrate(const py::array& normals_array, const std::optional<py::array>& mask_array,
+                   double pixel_mm, const std::string& method, bool preserve_discontinuities) {
   const cv::Mat normals = float_mat(normals_array, 3, "normals");
   cv::Mat mask;
   if (mask_array) {
@@ -126,7 +129,8 @@ py::dict integrate(const py::array& normals_array, const std::optional<py::array
   return out;
 }
 
-py::dict error_stats(const py::array& predicted, const py::array& truth, const std::optional<py::array>& mask) {
+py::dict error_stats(const py::array& predicted, const py::array& truth,
+                     const std::optional<py::array>& mask) {
   const cv::Mat p = float_mat(predicted, 3, "predicted");
   const cv::Mat t = float_mat(truth, 3, "truth");
   if (p.size() != t.size()) throw py::value_error("predicted and truth must have the same height and width");
@@ -137,8 +141,9 @@ py::dict error_stats(const py::array& predicted, const py::array& truth, const s
   return out;
 }
 
-py::dict calibrate(const std::vector<fs::path>& inputs, const std::optional<fs::path>& rig, int spheres_per_stack,
-                   double sphere_radius_mm, std::optional<double> dome_radius_mm, bool allow_missing, int threads) {
+py::dict calibrate(const std::vector<fs::path>& inputs, const std::optional<fs::path>& rig,
+                   int spheres_per_stack, double sphere_radius_mm, std::optional<double> dome_radius_mm,
+                   bool allow_missing, int threads) {
   calibration::LightCalibrationOptions options;
   options.inputs = inputs;
   if (rig) options.rig = *rig;
@@ -169,7 +174,8 @@ py::dict calibrate(const std::vector<fs::path>& inputs, const std::optional<fs::
 PYBIND11_MODULE(lightstage, m) {
   using namespace lightstage;
   using namespace lightstage::python;
-  m.doc() = "Lightstage: photometric stereo from light-stage captures (stacks, calibration, solvers, surfaces).";
+  m.doc() =
+      "Lightstage: photometric stereo from light-stage captures (stacks, calibration, solvers, surfaces).";
   m.attr("__version__") = kVersion;
   static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
   static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
@@ -187,7 +193,8 @@ PYBIND11_MODULE(lightstage, m) {
       "methods",
       [] {
         py::list out;
-        for (const auto& method : pipeline::solve_methods()) out.append(py::make_tuple(method.name, method.help));
+        for (const auto& method : pipeline::solve_methods())
+          out.append(py::make_tuple(method.name, method.help));
         return out;
       },
       "The solver methods as (name, help) pairs, in the order `lightstage solve --help` lists them.");
@@ -212,8 +219,8 @@ PYBIND11_MODULE(lightstage, m) {
         "Angular error statistics between two normal maps (degrees): mean, median, p90, max, count, missing, "
         "and the per-pixel map under 'degrees'.");
   m.def("calibrate_lights", &calibrate, py::arg("inputs"), py::arg("rig") = py::none(),
-        py::arg("spheres_per_stack") = 1, py::arg("sphere_radius_mm") = 0.0, py::arg("dome_radius_mm") = py::none(),
-        py::arg("allow_missing") = false, py::arg("threads") = 0,
+        py::arg("spheres_per_stack") = 1, py::arg("sphere_radius_mm") = 0.0,
+        py::arg("dome_radius_mm") = py::none(), py::arg("allow_missing") = false, py::arg("threads") = 0,
         "Light directions (and, from two or more sphere positions, LED positions) from chrome-sphere stacks, "
         "as `lightstage calibrate lights` computes them: the calibration as calibration.json holds it, plus "
         "directions (N x 3).");
@@ -226,7 +233,8 @@ PYBIND11_MODULE(lightstage, m) {
         return to_numpy(io::read_exr(path, channels));
       },
       py::arg("path"), py::arg("channels"),
-      "The named channels of an EXR file (normal.exr: R G B = x y z; albedo.exr: Y; depth.exr: Z) as float32.");
+      "The named channels of an EXR file (normal.exr: R G B = x y z; albedo.exr: Y; depth.exr: Z) as "
+      "float32.");
   m.def(
       "read_normal_map",
       [](const fs::path& path) {

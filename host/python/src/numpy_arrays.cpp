@@ -64,7 +64,8 @@ py::array_t<double> to_numpy(const Eigen::MatrixXd& matrix) {
 cv::Mat float_mat(const py::array& array, int channels, const char* name) {
   const auto values = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(array);
   if (!values) throw py::type_error(std::string(name) + ": expected a numeric array");
-  const bool shape_ok = channels == 1 ? values.ndim() == 2 : values.ndim() == 3 && values.shape(2) == channels;
+  const bool shape_ok =
+      channels == 1 ? values.ndim() == 2 : values.ndim() == 3 && values.shape(2) == channels;
   if (!shape_ok)
     throw py::value_error(std::string(name) + ": expected shape (height, width" +
                           (channels == 1 ? std::string(")") : ", " + std::to_string(channels) + ")"));
@@ -75,7 +76,8 @@ cv::Mat float_mat(const py::array& array, int channels, const char* name) {
 
 cv::Mat mask_mat(const py::array& array, const char* name) {
   const auto values = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(array);
-  if (!values || values.ndim() != 2) throw py::value_error(std::string(name) + ": expected shape (height, width)");
+  if (!values || values.ndim() != 2)
+    throw py::value_error(std::string(name) + ": expected shape (height, width)");
   cv::Mat out(static_cast<int>(values.shape(0)), static_cast<int>(values.shape(1)), CV_8UC1);
   const double* data = values.data();
   for (int i = 0; i < static_cast<int>(out.total()); ++i) out.data[i] = data[i] != 0 ? 255 : 0;

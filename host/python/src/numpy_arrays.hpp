@@ -3,10 +3,10 @@
 // arrays outlive the C++ objects). Colour images come out in RGB order (OpenCV
 // holds BGR); normals keep their (x, y, z) channel order.
 
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
 
 namespace lightstage::python {
 

@@ -31,9 +31,9 @@ double percentile(const std::vector<double>& sorted, double q) {
 }  // namespace
 
 std::string AngularErrorStats::describe() const {
-  std::string line =
-      fmt::format("angular error over {} pixels: mean {:.3f} deg, median {:.3f} deg, p90 {:.3f} deg, max {:.3f} deg",
-                  count, mean, median, p90, max);
+  std::string line = fmt::format(
+      "angular error over {} pixels: mean {:.3f} deg, median {:.3f} deg, p90 {:.3f} deg, max {:.3f} deg",
+      count, mean, median, p90, max);
   if (missing > 0) line += fmt::format(" ({} pixels without a prediction)", missing);
   return line;
 }

@@ -68,12 +68,9 @@ nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const Solve
   summary["width"] = result.normals.cols;
   summary["height"] = result.normals.rows;
   summary["albedo_png_scale"] = scale;
-  summary["files"] = {{"normals", "normal.png"},
-                      {"normals_visualisation", "normal_vis.png"},
-                      {"albedo", "albedo.png"},
-                      {"albedo_float", "albedo.pfm"},
-                      {"residual", "residual.pfm"},
-                      {"normals_exr", "normal.exr"},
+  summary["files"] = {{"normals", "normal.png"},    {"normals_visualisation", "normal_vis.png"},
+                      {"albedo", "albedo.png"},     {"albedo_float", "albedo.pfm"},
+                      {"residual", "residual.pfm"}, {"normals_exr", "normal.exr"},
                       {"albedo_exr", "albedo.exr"}};
   // Optional per-pixel outputs: confidence and a per-pixel reflectance model (one PFM per coefficient).
   if (!result.confidence.empty()) {
@@ -109,8 +106,8 @@ namespace fs = std::filesystem;
 cv::Mat read_float_plane(const fs::path& path, const cv::Size& size) {
   cv::Mat plane = read_pfm(path);
   if (plane.type() != CV_32FC1 || plane.size() != size)
-    fail("{}: expected one float channel of {}x{} (normal.png's size), got {} channel(s) of {}x{}", path.string(),
-         size.width, size.height, plane.channels(), plane.cols, plane.rows);
+    fail("{}: expected one float channel of {}x{} (normal.png's size), got {} channel(s) of {}x{}",
+         path.string(), size.width, size.height, plane.channels(), plane.cols, plane.rows);
   return plane;
 }
 
@@ -176,8 +173,8 @@ SolveFolder read_solve_folder(const fs::path& dir) {
     // The float normals, where normal.png holds one (the PNG is 16-bit).
     const cv::Mat exact = read_exr(dir / "normal.exr", {"R", "G", "B"});
     if (exact.size() != size)
-      fail("{}: {}x{} but normal.png is {}x{}", (dir / "normal.exr").string(), exact.cols, exact.rows, size.width,
-           size.height);
+      fail("{}: {}x{} but normal.png is {}x{}", (dir / "normal.exr").string(), exact.cols, exact.rows,
+           size.width, size.height);
     folder.normals = cv::Mat(size, CV_32FC3, cv::Scalar::all(0));
     exact.copyTo(folder.normals, folder.solved);
   }
@@ -191,8 +188,8 @@ SolveFolder read_solve_folder(const fs::path& dir) {
   } else if (fs::exists(dir / "albedo.png")) {
     const cv::Mat png = read_image(dir / "albedo.png");
     if (png.channels() != 1 || png.size() != size)
-      fail("{}: expected a grey image of {}x{} (normal.png's size)", (dir / "albedo.png").string(), size.width,
-           size.height);
+      fail("{}: expected a grey image of {}x{} (normal.png's size)", (dir / "albedo.png").string(),
+           size.width, size.height);
     png.convertTo(folder.albedo, CV_32FC1,
                   folder.albedo_png_scale / (png.depth() == CV_16U ? 65535.0 : 255.0));
     folder.albedo_from_png = true;

@@ -11,7 +11,8 @@ RelightModel relight_model(const io::SolveFolder& folder) {
   RelightModel model;
   model.normals = folder.normals;
   model.solved = folder.solved;
-  model.albedo = folder.albedo.empty() ? cv::Mat(folder.normals.size(), CV_32FC1, cv::Scalar::all(1)) : folder.albedo;
+  model.albedo =
+      folder.albedo.empty() ? cv::Mat(folder.normals.size(), CV_32FC1, cv::Scalar::all(1)) : folder.albedo;
   model.coefficients = folder.coefficients;
   model.order = folder.reflectance_order;
   return model;

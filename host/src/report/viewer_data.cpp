@@ -32,7 +32,8 @@ cv::Mat subsample(const cv::Mat& image, int stride) {
 
 }  // namespace
 
-SurfaceModel load_surface_model(const io::SolveFolder& folder, int max_pixels, std::vector<std::string>& notes) {
+SurfaceModel load_surface_model(const io::SolveFolder& folder, int max_pixels,
+                                std::vector<std::string>& notes) {
   if (max_pixels < 1) fail("report: viewer pixel budget must be ≥ 1, got {}", max_pixels);
   const RelightModel relight_model = lightstage::relight_model(folder);
   const nlohmann::json& summary = folder.summary;
@@ -41,9 +42,11 @@ SurfaceModel load_surface_model(const io::SolveFolder& folder, int max_pixels, s
   model.display_scale = folder.albedo_png_scale;
   if (folder.albedo.empty())
     notes.push_back(
-        "No albedo.pfm or albedo.png in the result folder: the viewer (like `lightstage relight`) uses albedo 1.");
+        "No albedo.pfm or albedo.png in the result folder: the viewer (like `lightstage relight`) uses "
+        "albedo 1.");
   else if (folder.albedo_from_png)
-    notes.push_back("No albedo.pfm in the result folder: the viewer uses albedo.png (16-bit, clipped at its scale).");
+    notes.push_back(
+        "No albedo.pfm in the result folder: the viewer uses albedo.png (16-bit, clipped at its scale).");
   if (relight_model.order > 0) {
     model.kind = ShadingKind::kBiPolynomial;
     model.order = relight_model.order;

@@ -7,8 +7,8 @@
 #include <opencv2/core.hpp>
 
 #include <cstddef>
-#include <string>
 #include <filesystem>
+#include <string>
 
 namespace lightstage {
 

@@ -41,8 +41,8 @@ double albedo_png_scale(const SolveResult& result);
 struct SolveFolder {
   std::filesystem::path dir;
   nlohmann::json summary = nlohmann::json::object();  // summary.json ({} when there is none)
-  cv::Mat normals;                                     // CV_32FC3 (normal.exr, else normal.png), zero where not solved
-  cv::Mat solved;                                      // CV_8UC1, 255 where normal.png holds a normal
+  cv::Mat normals;  // CV_32FC3 (normal.exr, else normal.png), zero where not solved
+  cv::Mat solved;   // CV_8UC1, 255 where normal.png holds a normal
   // CV_32FC1, the solver's albedo: albedo.pfm, else albedo.png times the
   // albedo_png_scale of summary.json; empty when the folder has neither.
   cv::Mat albedo;

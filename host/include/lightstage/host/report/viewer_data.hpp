@@ -44,7 +44,8 @@ struct SurfaceModel {
 // model `lightstage relight` renders (relight_model), so the two agree. Results
 // larger than `max_pixels` are subsampled with an integer stride (recorded in the
 // model). Notes on what was used or left out are appended to `notes`.
-SurfaceModel load_surface_model(const io::SolveFolder& folder, int max_pixels, std::vector<std::string>& notes);
+SurfaceModel load_surface_model(const io::SolveFolder& folder, int max_pixels,
+                                std::vector<std::string>& notes);
 
 // The value of pixel (x, y) under `light` (normalised here); 0 where not valid.
 double shade(const SurfaceModel& model, int x, int y, const Vec3& light);

@@ -38,7 +38,7 @@ struct DomeDemoOptions {
   // large sphere, far apart, as docs/calibration.md recommends for LED positions.
   double sphere_radius_mm = 25;
   std::vector<double> sphere_x_mm = {-25, 25};
-  CaptureOptions capture;  // exposure, darks, loop; `out` and `mode` are set per stage
+  CaptureOptions capture;                      // exposure, darks, loop; `out` and `mode` are set per stage
   SolveSettings solve = default_demo_solve();  // any method of the registry (solve_methods.hpp)
   OutputMode mode = OutputMode::kHuman;
 };

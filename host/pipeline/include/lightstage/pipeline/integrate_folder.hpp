@@ -13,13 +13,13 @@
 namespace lightstage::pipeline {
 
 struct IntegrateSettings {
-  std::string input;       // a solve folder (normals and, for the mesh colours, its albedo)
-  std::string normals;     // or a normal map (16-bit PNG, project encoding); overrides input's
-  std::string mask;        // object mask; empty = where the normal map has normals
-  std::string albedo;      // albedo image for the mesh colours (PNG or PFM); overrides input's
-  std::string out;         // the surface folder
-  std::string prior;       // depth prior to fuse with; empty = integrate
-  std::string intrinsics;  // K.txt: perspective camera; empty = orthographic
+  std::string input;               // a solve folder (normals and, for the mesh colours, its albedo)
+  std::string normals;             // or a normal map (16-bit PNG, project encoding); overrides input's
+  std::string mask;                // object mask; empty = where the normal map has normals
+  std::string albedo;              // albedo image for the mesh colours (PNG or PFM); overrides input's
+  std::string out;                 // the surface folder
+  std::string prior;               // depth prior to fuse with; empty = integrate
+  std::string intrinsics;          // K.txt: perspective camera; empty = orthographic
   std::string method = "poisson";  // poisson, frankot-chellappa (fc)
   std::string mesh = "ply";        // ply, obj, both or none
   double pixel_mm = 1.0;           // orthographic pixel size at the object
@@ -35,6 +35,7 @@ struct IntegrateReport {
 };
 
 // Throws InputError naming the file or flag at fault.
-IntegrateReport integrate_folder(const IntegrateSettings& settings, const surface::SurfaceProgress& on_progress = {});
+IntegrateReport integrate_folder(const IntegrateSettings& settings,
+                                 const surface::SurfaceProgress& on_progress = {});
 
 }  // namespace lightstage::pipeline

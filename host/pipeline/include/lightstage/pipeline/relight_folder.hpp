@@ -14,8 +14,8 @@ namespace lightstage::pipeline {
 struct RelightSettings {
   std::filesystem::path input;  // a solve folder
   std::filesystem::path out;
-  std::vector<Vec3> lights;     // object -> light, need not be unit
-  double scale = 0;             // value mapped to white; 0 = the 99.5th percentile of all frames' object pixels
+  std::vector<Vec3> lights;  // object -> light, need not be unit
+  double scale = 0;          // value mapped to white; 0 = the 99.5th percentile of all frames' object pixels
 };
 
 // Returns relight.json as written. Throws InputError naming the file or light.

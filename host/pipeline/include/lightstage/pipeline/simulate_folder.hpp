@@ -21,16 +21,17 @@ nlohmann::json simulate_to_folder(const std::filesystem::path& rig_path, const s
 // Natural lighting instead of the dome's LEDs (sim/natural_capture.hpp), for
 // `solve --method shape-prior`.
 struct NaturalSimulation {
-  std::string environment = "area-lights";  // area-lights or sh
-  std::string response = "random";          // random, fixed or linear (sim::parse_response_mode)
+  std::string environment = "area-lights";            // area-lights or sh
+  std::string response = "random";                    // random, fixed or linear (sim::parse_response_mode)
   int frames = sim::NaturalLightingOptions{}.images;  // images, each under its own lighting
-  int prior_beta = 3;                       // prior.pfm degraded as Fig. 4.5's level 1..5; 0 = none
+  int prior_beta = 3;                                 // prior.pfm degraded as Fig. 4.5's level 1..5; 0 = none
 };
 
 // Renders the scene under natural lighting and writes the stack, a degraded
 // depth prior and, for a pinhole camera, its intrinsics (K.txt). The summary
 // names them under "shape_prior_flags".
-nlohmann::json simulate_natural_to_folder(const std::filesystem::path& rig_path, const sim::SimulateOptions& options,
+nlohmann::json simulate_natural_to_folder(const std::filesystem::path& rig_path,
+                                          const sim::SimulateOptions& options,
                                           const NaturalSimulation& natural, const std::filesystem::path& out,
                                           const sim::FrameProgress& on_frames = {});
 

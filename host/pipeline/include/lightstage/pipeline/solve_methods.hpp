@@ -16,7 +16,8 @@
 
 namespace lightstage::pipeline {
 
-using SolveFunction = std::function<SolveResult(const Observations& observations, const SolveSettings& settings)>;
+using SolveFunction =
+    std::function<SolveResult(const Observations& observations, const SolveSettings& settings)>;
 
 struct SolveMethod {
   std::string name;
