@@ -3,6 +3,7 @@
 #include "lightstage/pipeline/dome_demo.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/host/io/solve_output.hpp"
 #include "lightstage/testing/paths.hpp"
 
 #include <gtest/gtest.h>
@@ -19,7 +20,7 @@ TEST(DomeDemo, RunsEveryStageWithTheChosenMethod) {
   options.out = dir / "demo";
   options.programs = testing::bin_dir();
   options.scene = "sphere";
-  options.width = options.height = 48;
+  options.width = options.height = 96;
   options.mode = OutputMode::kQuiet;
   options.solve.method = "robust";
   const nlohmann::json summary = run_dome_demo(options);
