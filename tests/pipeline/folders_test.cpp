@@ -34,13 +34,18 @@ fs::path simulated_sphere(const fs::path& dir) {
   return stack;
 }
 
-TEST(PipelineFolders, SolvesASimulatedStackAndMeasuresItsError) {
-  const fs::path dir = testing::scratch_dir();
-  const fs::path stack = simulated_sphere(dir);
+// The simulated sphere solved by `method` into dir/result.
+SolveReport solved_sphere(const fs::path& dir, const std::string& method) {
   SolveSettings settings;
+  settings.method = method;
   settings.shadow_threshold = 0.02;
   settings.resolve();
-  const SolveReport report = solve_folder(stack, settings, dir / "result");
+  return solve_folder(simulated_sphere(dir), settings, dir / "result");
+}
+
+TEST(PipelineFolders, SolvesASimulatedStackAndMeasuresItsError) {
+  const fs::path dir = testing::scratch_dir();
+  const SolveReport report = solved_sphere(dir, "l2");
   ASSERT_TRUE(report.error.has_value());
   EXPECT_LT(report.error->mean, 1.0);
   EXPECT_GT(report.error->count, 1000u);
@@ -54,12 +59,7 @@ TEST(PipelineFolders, SolvesASimulatedStackAndMeasuresItsError) {
 
 TEST(PipelineFolders, AnyRegisteredMethodSolvesAFolder) {
   const fs::path dir = testing::scratch_dir();
-  const fs::path stack = simulated_sphere(dir);
-  SolveSettings settings;
-  settings.method = "biquadratic";
-  settings.shadow_threshold = 0.02;
-  settings.resolve();
-  const SolveReport report = solve_folder(stack, settings, dir / "result");
+  const SolveReport report = solved_sphere(dir, "biquadratic");
   EXPECT_EQ(report.summary["method"], "biquadratic");
   ASSERT_TRUE(report.error.has_value());
   EXPECT_LT(report.error->mean, 2.0);
@@ -70,11 +70,7 @@ TEST(PipelineFolders, AnyRegisteredMethodSolvesAFolder) {
 
 TEST(PipelineFolders, IntegratesAndRelightsASolveFolder) {
   const fs::path dir = testing::scratch_dir();
-  const fs::path stack = simulated_sphere(dir);
-  SolveSettings settings;
-  settings.shadow_threshold = 0.02;
-  settings.resolve();
-  solve_folder(stack, settings, dir / "result");
+  solved_sphere(dir, "l2");
 
   IntegrateSettings integrate;
   integrate.input = (dir / "result").string();
