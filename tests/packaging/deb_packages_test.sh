@@ -9,6 +9,9 @@ set -euo pipefail
 cpack=$1 build=$2 scratch=$3 version=$4
 
 fail() { echo "FAIL: $*" >&2; exit 1; }
+# grep that reads all its input: `grep -q` stops at the first match, and with
+# pipefail the writer's SIGPIPE would then fail the check.
+contains() { grep "$@" >/dev/null; }
 rm -rf "$scratch"
 mkdir -p "$scratch/debs" "$scratch/root"
 root=$scratch/root
@@ -21,7 +24,7 @@ for package in lightstage lightstage-domed lightstage-sim lightstage-rigs; do
   files=("$scratch/debs/${package}_${version}-"*.deb)
   [ -f "${files[0]}" ] || fail "no package file for $package in $scratch/debs: $(ls "$scratch/debs")"
   deb[$package]=${files[0]}
-  dpkg-deb --field "${files[0]}" Package | grep -qx "$package" || fail "${files[0]}: Package is not $package"
+  dpkg-deb --field "${files[0]}" Package | contains -x "$package" || fail "${files[0]}: Package is not $package"
   dpkg -x "${files[0]}" "$root"
 done
 
@@ -34,7 +37,7 @@ done | sort | uniq -d >"$scratch/shared-files"
 # Where each package puts its files.
 expect_in() {
   local package=$1 path=$2
-  dpkg-deb --contents "${deb[$package]}" | awk '{ print $NF }' | grep -qx "\./${path#/}" ||
+  dpkg-deb --contents "${deb[$package]}" | awk '{ print $NF }' | contains -x "\./${path#/}" ||
     fail "$package does not contain /${path#/}"
 }
 expect_in lightstage usr/bin/lightstage
@@ -58,28 +61,30 @@ depends=$(dpkg-deb --field "${deb[lightstage]}" Depends)
 for library in libopencv libprotobuf lightstage-rigs; do
   grep -q "$library" <<<"$depends" || fail "lightstage's Depends has no $library: $depends"
 done
-dpkg-deb --field "${deb[lightstage-domed]}" Depends | grep -q lightstage-rigs || fail "lightstage-domed does not depend on lightstage-rigs"
-dpkg-deb --field "${deb[lightstage-rigs]}" Architecture | grep -qx all || fail "lightstage-rigs is not Architecture: all"
-dpkg-deb --info "${deb[lightstage-domed]}" postinst | grep -q "systemd-sysusers /usr/lib/sysusers.d/lightstage.conf" ||
+dpkg-deb --field "${deb[lightstage-domed]}" Depends | contains lightstage-rigs || fail "lightstage-domed does not depend on lightstage-rigs"
+dpkg-deb --field "${deb[lightstage-rigs]}" Architecture | contains -x all || fail "lightstage-rigs is not Architecture: all"
+dpkg-deb --info "${deb[lightstage-domed]}" postinst | contains "systemd-sysusers /usr/lib/sysusers.d/lightstage.conf" ||
   fail "lightstage-domed's postinst does not create the unit's user"
 
 # The programs, from the unpacked tree.
 rig=$root/usr/share/lightstage/rigs/sim-dome.yaml
-"$root/usr/bin/lightstage" --version | grep -q "lightstage $version" || fail "lightstage --version"
-"$root/usr/bin/lightstage-sim" --version | grep -q "$version" || fail "lightstage-sim --version"
+"$root/usr/bin/lightstage" --version | contains "lightstage $version" || fail "lightstage --version"
+"$root/usr/bin/lightstage-sim" --version | contains "$version" || fail "lightstage-sim --version"
 "$root/usr/bin/lightstage-domed" --check --rig "$rig" || fail "lightstage-domed --check --rig $rig"
-"$root/usr/bin/lightstage" demo --width 32 --height 32 --programs "$root/usr/bin" --rig "$rig" \
+# 128 px: the smallest images whose chrome-sphere highlights calibrate every LED.
+"$root/usr/bin/lightstage" demo --scene sphere --width 128 --height 128 --programs "$root/usr/bin" --rig "$rig" \
   --out "$scratch/demo" --quiet || fail "lightstage demo from the unpacked packages (logs: $scratch/demo/dome)"
 [ -f "$scratch/demo/demo.json" ] || fail "the demo wrote no demo.json"
 
-# Man pages render, with the installed rig folder in the defaults.
+# Man pages render, with the installed rig folder in the defaults (under the
+# configured prefix, which the programs were built with), not the source tree's.
 for program in lightstage lightstage-domed lightstage-sim; do
   page=$root/usr/share/man/man1/$program.1.gz
   MANWIDTH=80 man -l "$page" >"$scratch/$program.txt" 2>"$scratch/$program.man-errors" || fail "man -l $page"
   grep -q SYNOPSIS "$scratch/$program.txt" || fail "$program.1 has no SYNOPSIS"
   grep -q "$program \[OPTIONS\]" "$scratch/$program.txt" || fail "$program.1's synopsis does not name $program"
 done
-grep -q "/usr/share/lightstage/rigs/sim-dome.yaml" "$scratch/lightstage-domed.txt" ||
+grep -q "share/lightstage/rigs/sim-dome.yaml" "$scratch/lightstage-domed.txt" ||
   fail "lightstage-domed.1 does not show the installed rig folder"
 
 # The unit starts the daemon where the package put it.
@@ -96,7 +101,7 @@ complete_words() {
            _lightstage; printf "%s\n" "${COMPREPLY[@]}"' _ \
     "$root/usr/share/bash-completion/completions/lightstage" "$@"
 }
-complete_words "$root/usr/bin/lightstage" de | grep -qx demo || fail "completion: 'lightstage de' offers no demo"
-complete_words "$root/usr/bin/lightstage" demo --wi | grep -qx -- --width || fail "completion: 'lightstage demo --wi' offers no --width"
-complete_words "$root/usr/bin/lightstage" demo --method ro | grep -qx robust || fail "completion: 'lightstage demo --method ro' offers no robust"
+complete_words "$root/usr/bin/lightstage" de | contains -x demo || fail "completion: 'lightstage de' offers no demo"
+complete_words "$root/usr/bin/lightstage" demo --wi | contains -x -- --width || fail "completion: 'lightstage demo --wi' offers no --width"
+complete_words "$root/usr/bin/lightstage" demo --method ro | contains -x robust || fail "completion: 'lightstage demo --method ro' offers no robust"
 echo "packages: ${deb[*]}"
