@@ -61,6 +61,9 @@ depends=$(dpkg-deb --field "${deb[lightstage]}" Depends)
 for library in libopencv libprotobuf lightstage-rigs; do
   grep -q "$library" <<<"$depends" || fail "lightstage's Depends has no $library: $depends"
 done
+description=$(dpkg-deb --field "${deb[lightstage]}" Description)
+[ "${description%%$'\n'*}" = "photometric stereo on a light stage: the host program" ] ||
+  fail "lightstage's Description does not start with its synopsis: $description"
 dpkg-deb --field "${deb[lightstage-domed]}" Depends | contains lightstage-rigs || fail "lightstage-domed does not depend on lightstage-rigs"
 dpkg-deb --field "${deb[lightstage-rigs]}" Architecture | contains -x all || fail "lightstage-rigs is not Architecture: all"
 dpkg-deb --info "${deb[lightstage-domed]}" postinst | contains "systemd-sysusers /usr/lib/sysusers.d/lightstage.conf" ||
