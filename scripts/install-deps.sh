@@ -15,6 +15,7 @@ packages=(
   libprotobuf-dev protobuf-compiler zlib1g-dev
   pybind11-dev python3-dev python3-numpy  # the Python module (host/python) and its test
   chromium  # the report viewer's headless-browser test (tests/report)
+  help2man man-db  # man pages from --help (packaging/) and the packaging test reading them
 )
 # That test drives Chromium from Node (npm ci at build time); Debian's own
 # nodejs + npm only when the machine has no node of its own (e.g. NodeSource).
