@@ -4,7 +4,7 @@
 # Build them in a build folder with `cmake --build build --target package` or
 # `cd build && cpack -G DEB`. Configure that build with -DCMAKE_INSTALL_PREFIX=/usr:
 # the programs look for the rigs under the prefix they were configured with.
-set(LIGHTSTAGE_PACKAGE_MAINTAINER "Lightstage maintainers <maintainers@users.noreply.h-seed-74e1bb06.example>"
+set(LIGHTSTAGE_PACKAGE_MAINTAINER "Lightstage developers <lightstage@example.org>"
     CACHE STRING "Maintainer field of the Debian packages")
 set(LIGHTSTAGE_PACKAGE_PREFIX /usr)
 if(NOT CMAKE_INSTALL_PREFIX STREQUAL LIGHTSTAGE_PACKAGE_PREFIX)
