@@ -108,16 +108,19 @@ TEST(CaptureStackWriter, TheFolderIsALoadableStackAfterEveryFrame) {
   EXPECT_EQ(manifest.at("frames").at(0).at("trigger_ns"), 123);
 }
 
+// One frame and its dark written with the index, as an interrupted capture leaves a stack.
+void write_one_frame_stack(const Rig& rig, const fs::path& dir) {
+  CaptureStackWriter writer(rig, dir, nullptr);
+  writer.set_plan(single_plan(), kSetup);
+  writer.add_dark(0, {cv::Mat(4, 5, CV_16UC1, cv::Scalar(8))});
+  writer.add_frame(1, take(0, 500, 300));
+  writer.write_index(false);
+}
+
 TEST(CaptureStackWriter, ResumeKeepsTheFramesDarksAndExposuresOfTheManifest) {
   const Rig rig = three_led_rig();
   const fs::path dir = testing::scratch_dir();
-  {
-    CaptureStackWriter writer(rig, dir, nullptr);
-    writer.set_plan(single_plan(), kSetup);
-    writer.add_dark(0, {cv::Mat(4, 5, CV_16UC1, cv::Scalar(8))});
-    writer.add_frame(1, take(0, 500, 300));
-    writer.write_index(false);
-  }
+  write_one_frame_stack(rig, dir);
   nlohmann::json before = read_json(dir / "manifest.json");
 
   CaptureStackWriter writer(rig, dir, nullptr);
@@ -170,13 +173,7 @@ TEST(CaptureStackWriter, ResumeRefusesAnotherPlan) {
 TEST(CaptureStackWriter, ResumeReadsNoFileOutsideTheStackFolder) {
   const Rig rig = three_led_rig();
   const fs::path dir = testing::scratch_dir();
-  {
-    CaptureStackWriter writer(rig, dir, nullptr);
-    writer.set_plan(single_plan(), kSetup);
-    writer.add_dark(0, {cv::Mat(4, 5, CV_16UC1, cv::Scalar(8))});
-    writer.add_frame(1, take(0, 500, 300));
-    writer.write_index(false);
-  }
+  write_one_frame_stack(rig, dir);
   const nlohmann::json good = read_json(dir / "manifest.json");
   const auto refused = [&](const std::function<void(nlohmann::json&)>& edit) {
     nlohmann::json bad = good;
