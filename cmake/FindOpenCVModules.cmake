@@ -1,8 +1,11 @@
-# Finds the few OpenCV modules we use (core, imgproc, imgcodecs, photo) from
-# Debian's per-module -dev packages, which ship no CMake config of their own
-# (only the 150-package libopencv-dev meta package does).
+# Finds the OpenCV modules named as COMPONENTS (we use core, imgproc, imgcodecs,
+# photo) from Debian's per-module -dev packages, which ship no CMake config of
+# their own (only the 150-package libopencv-dev meta package does).
 find_path(OpenCVModules_INCLUDE_DIR opencv2/core.hpp PATH_SUFFIXES opencv4)
-set(OpenCVModules_COMPONENTS core imgproc imgcodecs photo)
+set(OpenCVModules_COMPONENTS ${OpenCVModules_FIND_COMPONENTS})
+if(NOT OpenCVModules_COMPONENTS)
+  set(OpenCVModules_COMPONENTS core)
+endif()
 set(_opencv_required OpenCVModules_INCLUDE_DIR)
 foreach(component ${OpenCVModules_COMPONENTS})
   find_library(OpenCVModules_${component}_LIBRARY opencv_${component})

@@ -1,15 +1,23 @@
 # Every dependency comes from a Debian 12 package; scripts/install-deps.sh installs them.
+# What the controller's part (common/, hw/, firmware/) needs.
 find_package(Eigen3 3.4 REQUIRED NO_MODULE)
 find_package(yaml-cpp REQUIRED)
-find_package(nlohmann_json 3.10 REQUIRED)
 find_package(CLI11 REQUIRED)
 find_package(fmt REQUIRED)
 find_package(spdlog REQUIRED)
 find_package(Threads REQUIRED)
-find_package(OpenCVModules REQUIRED)
-# EXR images through OpenEXR itself (libopenexr-dev; OpenEXR 3.1 on Debian 12).
-find_package(OpenEXR 3.1 CONFIG REQUIRED)
 find_package(PkgConfig)
+if(LIGHTSTAGE_CONTROLLER_ONLY)
+  set(LIGHTSTAGE_OPENCV_COMPONENTS core)
+else()
+  set(LIGHTSTAGE_OPENCV_COMPONENTS photo imgcodecs imgproc core)  # in link order
+endif()
+find_package(OpenCVModules REQUIRED COMPONENTS ${LIGHTSTAGE_OPENCV_COMPONENTS})
+if(NOT LIGHTSTAGE_CONTROLLER_ONLY)
+  find_package(nlohmann_json 3.10 REQUIRED)
+  # EXR images through OpenEXR itself (libopenexr-dev; OpenEXR 3.1 on Debian 12).
+  find_package(OpenEXR 3.1 CONFIG REQUIRED)
+endif()
 
 # Optional hardware backends: AUTO builds what is found.
 function(lightstage_optional_backend var found_var description)
@@ -27,10 +35,14 @@ function(lightstage_optional_backend var found_var description)
   endif()
 endfunction()
 
+# The pkg-config modules (also what packaging/library.cmake's consumers need).
+set(LIGHTSTAGE_GPIOD_MODULE libgpiodcxx>=1.6)
+set(LIGHTSTAGE_LIBCAMERA_MODULE libcamera)
+set(LIGHTSTAGE_LIBUSB_MODULE libusb-1.0)
 if(PkgConfig_FOUND)
-  pkg_check_modules(LIBGPIOD IMPORTED_TARGET libgpiodcxx>=1.6)
-  pkg_check_modules(LIBCAMERA IMPORTED_TARGET libcamera)
-  pkg_check_modules(LIBUSB IMPORTED_TARGET libusb-1.0)
+  pkg_check_modules(LIBGPIOD IMPORTED_TARGET ${LIGHTSTAGE_GPIOD_MODULE})
+  pkg_check_modules(LIBCAMERA IMPORTED_TARGET ${LIGHTSTAGE_LIBCAMERA_MODULE})
+  pkg_check_modules(LIBUSB IMPORTED_TARGET ${LIGHTSTAGE_LIBUSB_MODULE})
 endif()
 include(CheckIncludeFileCXX)
 check_include_file_cxx(linux/videodev2.h HAVE_VIDEODEV2_H)
@@ -44,7 +56,7 @@ if(LIGHTSTAGE_BUILD_TESTS OR LIGHTSTAGE_BUILD_BENCHMARKS)
   find_package(GTest REQUIRED)
   include(GoogleTest)
 endif()
-if(LIGHTSTAGE_BUILD_BENCHMARKS)
+if(LIGHTSTAGE_BUILD_BENCHMARKS AND NOT LIGHTSTAGE_CONTROLLER_ONLY)
   find_package(benchmark REQUIRED)
 endif()
 
@@ -56,7 +68,8 @@ find_package(ZLIB REQUIRED)
 # import. Not in sanitizer or fuzz builds: an instrumented module cannot load
 # into an uninstrumented interpreter.
 set(LIGHTSTAGE_HAVE_PYTHON OFF)
-if(NOT LIGHTSTAGE_WITH_PYTHON STREQUAL "OFF" AND NOT LIGHTSTAGE_SANITIZE AND NOT LIGHTSTAGE_FUZZ)
+if(NOT LIGHTSTAGE_WITH_PYTHON STREQUAL "OFF" AND NOT LIGHTSTAGE_SANITIZE AND NOT LIGHTSTAGE_FUZZ
+   AND NOT LIGHTSTAGE_CONTROLLER_ONLY)
   if(NOT Python3_EXECUTABLE)
     # The first python3 on PATH can be a private one without numpy (e.g. pyenv's);
     # Debian's own interpreter is where python3-numpy installs.
@@ -74,4 +87,6 @@ if(NOT LIGHTSTAGE_WITH_PYTHON STREQUAL "OFF" AND NOT LIGHTSTAGE_SANITIZE AND NOT
     find_package(pybind11 2.6 CONFIG)
   endif()
 endif()
-lightstage_optional_backend(PYTHON pybind11_FOUND "Python module (pybind11, numpy)")
+if(NOT LIGHTSTAGE_CONTROLLER_ONLY)
+  lightstage_optional_backend(PYTHON pybind11_FOUND "Python module (pybind11, numpy)")
+endif()

@@ -1,13 +1,28 @@
 # One way to add libraries, programs and tests everywhere in the tree.
 
-# lightstage_library(NAME SOURCES ... DEPS ...): a static library whose public
-# headers live in <module>/include.
+# lightstage_library(NAME SOURCES ... DEPS ...): a library (static, or shared
+# with LIGHTSTAGE_SHARED_LIBS) whose public headers live in <module>/include;
+# installed ones find them under include/ (packaging/library.cmake).
 function(lightstage_library name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
-  add_library(${name} STATIC ${ARG_SOURCES})
-  target_include_directories(${name} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
+  add_library(${name} ${LIGHTSTAGE_LIBRARY_TYPE} ${ARG_SOURCES})
+  target_include_directories(${name} PUBLIC $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
+                                            $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_link_libraries(${name} PUBLIC ${ARG_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   target_compile_options(${name} PRIVATE ${LIGHTSTAGE_WARNINGS})
+  set_target_properties(${name} PROPERTIES LIGHTSTAGE_HEADER_DIR ${CMAKE_CURRENT_SOURCE_DIR}/include)
+  lightstage_library_version(${name})
+endfunction()
+
+# Shared libraries carry the version in their file name and soname (0.1: no
+# stable ABI before 1.0, so every minor version is a new soname). No
+# <target>_EXPORTS define: nothing of ours reads it, and the objects then
+# compile as the static build's do.
+function(lightstage_library_version name)
+  if(LIGHTSTAGE_SHARED_LIBS)
+    set_target_properties(${name} PROPERTIES VERSION ${PROJECT_VERSION}
+                          SOVERSION ${PROJECT_VERSION_MAJOR}.${PROJECT_VERSION_MINOR} DEFINE_SYMBOL "")
+  endif()
 endfunction()
 
 # lightstage_program(NAME SOURCES ... DEPS ...): an executable in build/bin.

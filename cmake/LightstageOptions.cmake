@@ -9,6 +9,18 @@ endforeach()
 set(LIGHTSTAGE_WITH_PYTHON AUTO CACHE STRING "Build the Python module (AUTO, ON, OFF; never in sanitizer or fuzz builds)")
 set_property(CACHE LIGHTSTAGE_WITH_PYTHON PROPERTY STRINGS ${LIGHTSTAGE_BACKEND_CHOICES})
 
+# The controller board's part only: common/, hw/, firmware/ and their tests, the
+# lightstage-domed and lightstage-rigs packages (the arm64 cross build).
+option(LIGHTSTAGE_CONTROLLER_ONLY "Build only what runs on the dome controller" OFF)
+# Shared libraries instead of static ones (programs, tests and the Python
+# module then load them; the installed programs from ../lib/<multiarch>).
+option(LIGHTSTAGE_SHARED_LIBS "Build the libraries as shared libraries" OFF)
+if(LIGHTSTAGE_SHARED_LIBS)
+  set(LIGHTSTAGE_LIBRARY_TYPE SHARED)
+  set(CMAKE_INSTALL_RPATH "$ORIGIN/../${CMAKE_INSTALL_LIBDIR}")
+else()
+  set(LIGHTSTAGE_LIBRARY_TYPE STATIC)
+endif()
 option(LIGHTSTAGE_BUILD_TESTS "Build the tests" ON)
 option(LIGHTSTAGE_BUILD_BENCHMARKS "Build the benchmarks" ON)
 option(LIGHTSTAGE_SANITIZE "Build with AddressSanitizer and UndefinedBehaviorSanitizer" OFF)

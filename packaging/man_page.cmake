@@ -1,8 +1,12 @@
-# cmake -DHELP2MAN=... -DPROGRAM=path -DNAME=name -DVERSION=x.y.z -DSUMMARY=...
+# cmake -DHELP2MAN=... -DPROGRAM=path [-DRUN=command] -DNAME=name -DVERSION=x.y.z -DSUMMARY=...
 #       -DOUT=page.1.gz -DDOCDIR=... -DBUILD_RIGDIR=... -DINSTALL_RIGDIR=... -P man_page.cmake
 # Writes a program's man page from its --help and --version, as installed: the
 # program's name instead of its build path, and the installed rig folder in the
-# defaults instead of the source tree's.
+# defaults instead of the source tree's. RUN: what help2man runs, when not PROGRAM
+# itself (a cross build's program under its emulator).
+if(NOT RUN)
+  set(RUN ${PROGRAM})
+endif()
 get_filename_component(out_dir ${OUT} DIRECTORY)
 file(MAKE_DIRECTORY ${out_dir})
 string(REGEX REPLACE "\\.gz$" "" page ${OUT})
@@ -21,7 +25,7 @@ file(APPEND ${include_file} ".PP\nThe file formats, the protocol and the hardwar
 # which would end up in the page.
 execute_process(
   COMMAND ${HELP2MAN} --no-info --no-discard-stderr --name=${SUMMARY} --section=1
-          --version-string=${VERSION} --include=${include_file} --output=${page} ${PROGRAM}
+          --version-string=${VERSION} --include=${include_file} --output=${page} ${RUN}
   RESULT_VARIABLE status
   ERROR_VARIABLE errors)
 if(NOT status EQUAL 0)
@@ -30,6 +34,7 @@ endif()
 file(REMOVE ${include_file})
 file(READ ${page} text)
 string(REPLACE "${PROGRAM}" "${NAME}" text "${text}")
+string(REPLACE "${RUN}" "${NAME}" text "${text}")
 string(REPLACE "./${NAME}" "${NAME}" text "${text}")
 # roff shows '-' as a hyphen; help2man escapes them, so the rig paths are matched escaped too.
 string(REPLACE "-" "\\-" build_rigdir "${BUILD_RIGDIR}")

@@ -1,18 +1,26 @@
 #!/usr/bin/env bash
 # Configures and builds one flavour of the tree.
-#   scripts/build.sh [release|sanitize|fuzz]   (default: release)
-# Build folders: build/ (release), build-sanitize/, build-fuzz/.
+#   scripts/build.sh [release|sanitize|fuzz|arm64]   (default: release)
+# Build folders: build/ (release), build-sanitize/, build-fuzz/, build-arm64/
+# (the controller board's part, cross-built; scripts/install-deps.sh arm64
+# installs its toolchain).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 flavour=${1:-release}
 case "$flavour" in
   release)  dir=$root/build;          args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo) ;;
   # -O1: sanitizers are meant to run optimised a little; Eigen at -O0 is too slow for the solver tests.
+  # Shared libraries: every test then also runs the LIGHTSTAGE_SHARED_LIBS build.
   sanitize) dir=$root/build-sanitize; args=(-DCMAKE_BUILD_TYPE=Debug "-DCMAKE_CXX_FLAGS_DEBUG=-O1 -g" -DLIGHTSTAGE_SANITIZE=ON
-                                          -DLIGHTSTAGE_BUILD_BENCHMARKS=OFF) ;;
+                                          -DLIGHTSTAGE_BUILD_BENCHMARKS=OFF -DLIGHTSTAGE_SHARED_LIBS=ON) ;;
   fuzz)     dir=$root/build-fuzz;     args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIGHTSTAGE_FUZZ=ON -DLIGHTSTAGE_BUILD_TESTS=OFF
                                           -DCMAKE_CXX_COMPILER=clang++ -DLIGHTSTAGE_BUILD_BENCHMARKS=OFF) ;;
-  *) echo "usage: $0 [release|sanitize|fuzz]" >&2; exit 2 ;;
+  # Packages install to /usr: the daemon looks for its rigs under the prefix it was built for.
+  arm64)    dir=$root/build-arm64;    args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIGHTSTAGE_CONTROLLER_ONLY=ON
+                                          -DCMAKE_TOOLCHAIN_FILE=$root/cmake/toolchains/aarch64-linux-gnu.cmake
+                                          "-DLIGHTSTAGE_CROSS_ROOT=${LIGHTSTAGE_CROSS_ROOT:-$root/build-arm64/cross-root}"
+                                          -DCMAKE_INSTALL_PREFIX=/usr) ;;
+  *) echo "usage: $0 [release|sanitize|fuzz|arm64]" >&2; exit 2 ;;
 esac
 jobs=${LIGHTSTAGE_JOBS:-$(nproc)}
 cmake -S "$root" -B "$dir" -G Ninja "${args[@]}" >/dev/null

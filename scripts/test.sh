@@ -2,11 +2,15 @@
 # The whole test suite, from a fresh machine: installs what is missing, then
 #   1. builds the release tree and runs every test (unit, integration, e2e),
 #   2. builds with AddressSanitizer + UndefinedBehaviorSanitizer and runs them again,
-#   3. builds the libFuzzer targets with clang and runs each one briefly on its corpus.
+#   3. builds the libFuzzer targets with clang and runs each one briefly on its corpus,
+#   4. cross-builds the controller board's part for arm64 and runs its tests (and
+#      its package's) under qemu's user-mode emulator.
 # Set LIGHTSTAGE_TEST_FLAVOURS="release" (or "release sanitize") to run fewer.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-"$root/scripts/install-deps.sh"
+flavours=${LIGHTSTAGE_TEST_FLAVOURS:-release sanitize fuzz arm64}
+# shellcheck disable=SC2086  # one word per flavour
+"$root/scripts/install-deps.sh" $flavours
 
 # The real-data tests (DiLiGenT ball, UW sets) read LIGHTSTAGE_SHARED_DATA, or
 # else ../shared/data next to the checkout.
@@ -16,7 +20,6 @@ if [ -z "${LIGHTSTAGE_SHARED_DATA:-}" ] && [ -d "$root/../shared/data/diligent" 
 fi
 echo "real data: ${LIGHTSTAGE_SHARED_DATA:-not found (set LIGHTSTAGE_SHARED_DATA; those tests skip)}"
 
-flavours=${LIGHTSTAGE_TEST_FLAVOURS:-release sanitize fuzz}
 jobs=${LIGHTSTAGE_JOBS:-$(nproc)}
 passed=0
 failed=0
@@ -27,6 +30,7 @@ for flavour in $flavours; do
     release) dir=$root/build ;;
     sanitize) dir=$root/build-sanitize ;;
     fuzz) dir=$root/build-fuzz ;;
+    arm64) dir=$root/build-arm64 ;;
   esac
   echo "=== $flavour: test ==="
   log=$dir/ctest.log

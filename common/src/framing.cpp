@@ -112,25 +112,63 @@ std::optional<FrameDecoder::Frame> FrameDecoder::next() {
   }
 }
 
+std::optional<FrameDecoder::Frame> FrameDecoder::abandon_partial() {
+  const std::size_t size = buffered();
+  if (size == 0) return std::nullopt;
+  std::string what = fmt::format("{} byte(s) of an incomplete frame", size);
+  if (size >= kHeaderSize) {
+    const std::uint8_t* data = buffer_.data() + start_;
+    what = fmt::format("{} of the {} bytes of a frame", size, kHeaderSize + get_u32(data + 2) + kTrailerSize);
+  }
+  // Up to the next magic only, so that a frame begun inside the abandoned one
+  // is still found.
+  const std::uint8_t* data = buffer_.data() + start_;
+  std::size_t skip = 1;
+  while (skip < size && !(data[skip] == kMagic0 && (skip + 1 == size || data[skip + 1] == kMagic1))) ++skip;
+  advance(skip);
+  return Frame{{}, fmt::format("abandoned {}: its sender stopped mid-frame", what)};
+}
+
 void FrameDecoder::advance(std::size_t count) {
   start_ += count;
   lookahead_ = 0;
+  pending_.clear();
 }
 
 std::optional<std::size_t> FrameDecoder::later_complete_frame() {
   const std::uint8_t* data = buffer_.data() + start_;
   const std::size_t size = buffer_.size() - start_;
-  // Candidates start after our magic. Everything before `at` is settled:
-  // no magic there, or a frame that is complete and failed its CRC. The scan
-  // stops at the first candidate still incomplete, to look at it again later.
+  const auto valid_at = [&](std::size_t at, std::uint32_t length) {
+    return crc32_of(std::span(data + at + kHeaderSize, length)) == get_u32(data + at + kHeaderSize + length);
+  };
+  // Candidates seen before and now complete: the earliest valid one wins.
+  std::optional<std::size_t> found;
+  while (!pending_.empty() && pending_.front().end <= size) {
+    std::pop_heap(pending_.begin(), pending_.end(), std::greater<>());
+    const PendingCandidate candidate = pending_.back();
+    pending_.pop_back();
+    if (valid_at(candidate.at, get_u32(data + candidate.at + 2)) && (!found || candidate.at < *found)) {
+      found = candidate.at;
+    }
+  }
+  if (found) return found;
+  // New candidates start after our magic. A candidate still incomplete waits
+  // in pending_ while the scan goes on, so that a run of frames cut short one
+  // after another cannot hide the complete frame behind them.
   std::size_t at = std::max<std::size_t>(lookahead_, 1);
   for (; at + 1 < size; ++at) {
     if (data[at] != kMagic0 || data[at + 1] != kMagic1) continue;
     if (size - at < kHeaderSize) break;
     const std::uint32_t length = get_u32(data + at + 2);
     if (length > kMaxPayload) continue;
-    if (size - at < kHeaderSize + length + kTrailerSize) break;
-    if (crc32_of(std::span(data + at + kHeaderSize, length)) == get_u32(data + at + kHeaderSize + length)) {
+    const std::size_t end = at + kHeaderSize + length + kTrailerSize;
+    if (size < end) {
+      pending_.push_back({end, at});
+      std::push_heap(pending_.begin(), pending_.end(), std::greater<>());
+      continue;
+    }
+    if (valid_at(at, length)) {
+      lookahead_ = at;
       return at;
     }
   }

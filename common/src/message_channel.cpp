@@ -7,7 +7,11 @@
 
 namespace lightstage {
 
-MessageChannel::MessageChannel(std::unique_ptr<ByteLink> link) : link_(std::move(link)) {}
+MessageChannel::MessageChannel(std::unique_ptr<ByteLink> link,
+                               std::chrono::milliseconds partial_frame_timeout)
+    : link_(std::move(link)),
+      partial_frame_timeout_(partial_frame_timeout),
+      last_bytes_at_(std::chrono::steady_clock::now()) {}
 
 void MessageChannel::send(const google::protobuf::MessageLite& message) {
   std::string bytes;
@@ -32,13 +36,26 @@ bool MessageChannel::receive(google::protobuf::MessageLite& message, std::chrono
       return true;
     }
     const auto now = std::chrono::steady_clock::now();
+    // Nothing complete is buffered here, so whatever is buffered is a frame begun.
+    if (decoder_.buffered() > 0 && now - last_bytes_at_ >= partial_frame_timeout_) {
+      if (auto report = decoder_.abandon_partial()) {
+        throw ProtocolError(fmt::format("{}: {}", link_->describe(), report->error));
+      }
+    }
     if (now >= deadline && timeout.count() > 0) return false;
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now);
+    auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now);
+    if (decoder_.buffered() > 0 && timeout.count() > 0) {
+      // Wake in time to give up on the frame begun.
+      left = std::min(left, std::chrono::duration_cast<std::chrono::milliseconds>(
+                                last_bytes_at_ + partial_frame_timeout_ - now));
+    }
     const std::size_t n = link_->read(chunk, std::max(left, std::chrono::milliseconds(0)));
     if (n == 0) {
       if (std::chrono::steady_clock::now() >= deadline) return false;
       continue;
     }
+    last_bytes_at_ = std::chrono::steady_clock::now();
+    bytes_received_ += n;
     decoder_.feed(std::span(chunk.data(), n));
   }
 }

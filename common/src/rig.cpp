@@ -1,9 +1,11 @@
 #include "lightstage/common/rig.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/printable.hpp"
 
 #include "lightstage/common/yaml_field.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -15,6 +17,17 @@ namespace lightstage {
 namespace {
 
 using Field = YamlField;
+
+// A duration in microseconds: positive and at most kMaxRigDurationUs, so that
+// the firmware's nanosecond clocks (int64) cannot overflow whatever the file says.
+double duration_us(const Field& f) {
+  const double value = f.positive();
+  if (value > kMaxRigDurationUs) {
+    f.error(
+        fmt::format("must be at most {:.0f} us (one hour), got {}", kMaxRigDurationUs, printable(f.text())));
+  }
+  return value;
+}
 
 // A line: an offset ("7"), a name ("LED_07"), or {line: ..., active_low: true}.
 LineRef parse_line(const Field& f) {
@@ -39,12 +52,12 @@ LineRef parse_line(const Field& f) {
 
 LedLimits parse_limits(const Field& f, LedLimits limits) {
   f.only_keys({"max_on_us", "max_duty", "duty_window_us"});
-  if (f.has("max_on_us")) limits.max_on_us = f["max_on_us"].positive();
+  if (f.has("max_on_us")) limits.max_on_us = duration_us(f["max_on_us"]);
   if (f.has("max_duty")) {
     limits.max_duty = f["max_duty"].positive();
     if (limits.max_duty > 1) f["max_duty"].error("must be in (0, 1]");
   }
-  if (f.has("duty_window_us")) limits.duty_window_us = f["duty_window_us"].positive();
+  if (f.has("duty_window_us")) limits.duty_window_us = duration_us(f["duty_window_us"]);
   return limits;
 }
 
@@ -59,7 +72,7 @@ CameraDefaults parse_camera(const Field& f) {
     } else if (model == "pinhole") {
       cam.model = CameraModel::kPinhole;
     } else {
-      f["model"].error("must be 'orthographic' or 'pinhole', got '" + model + "'");
+      f["model"].error("must be 'orthographic' or 'pinhole', got '" + printable(model) + "'");
     }
   }
   cam.width = f["width"].integer();
@@ -72,7 +85,7 @@ CameraDefaults parse_camera(const Field& f) {
   if (cam.model == CameraModel::kPinhole && cam.focal_px <= 0) {
     f.error("a pinhole camera needs focal_px");
   }
-  if (f.has("exposure_us")) cam.exposure_us = f["exposure_us"].positive();
+  if (f.has("exposure_us")) cam.exposure_us = duration_us(f["exposure_us"]);
   if (f.has("gain")) cam.gain = f["gain"].positive();
   if (f.has("bit_depth")) {
     cam.bit_depth = f["bit_depth"].integer();
@@ -92,7 +105,7 @@ ShiftRegisterChain parse_chain(const Field& f) {
   if (f.has("output_enable")) chain.output_enable = parse_line(f["output_enable"]);
   chain.length = f["length"].integer();
   if (chain.length <= 0 || chain.length > 4096) f["length"].error("must be in 1..4096");
-  if (f.has("clock_period_us")) chain.clock_period_us = f["clock_period_us"].positive();
+  if (f.has("clock_period_us")) chain.clock_period_us = duration_us(f["clock_period_us"]);
   return chain;
 }
 
@@ -136,7 +149,8 @@ void check_rig(const Rig& rig, const Field& root) {
     claim(c.latch, "chain '" + c.name + "' latch", where);
     if (c.output_enable) claim(*c.output_enable, "chain '" + c.name + "' output enable", where);
     for (std::size_t j = 0; j < i; ++j) {
-      if (rig.chains[j].name == c.name) where["name"].error("duplicate chain name '" + c.name + "'");
+      if (rig.chains[j].name == c.name)
+        where["name"].error("duplicate chain name '" + printable(c.name) + "'");
     }
   }
   std::set<int> ids;
@@ -155,7 +169,7 @@ void check_rig(const Rig& rig, const Field& root) {
     } else {
       const auto& bit = std::get<ChainWiring>(led.wiring);
       const ShiftRegisterChain* chain = rig.chain(bit.chain);
-      if (!chain) where["chain"].error("no chain named '" + bit.chain + "'");
+      if (!chain) where["chain"].error("no chain named '" + printable(bit.chain) + "'");
       if (bit.bit < 0 || bit.bit >= chain->length) {
         where["bit"].error("bit " + std::to_string(bit.bit) + " outside chain '" + bit.chain +
                            "' of length " + std::to_string(chain->length));
@@ -176,6 +190,10 @@ Rig parse_document(const Field& root, const std::string& source) {
   rig.source = source;
   rig.name = root["name"].text();
   if (rig.name.empty()) root["name"].error("must not be empty");
+  // The name is printed by both sides and compared between them: no terminal controls in it.
+  if (std::any_of(rig.name.begin(), rig.name.end(), [](unsigned char c) { return c < 0x20 || c == 0x7f; })) {
+    root["name"].error("must not contain control characters, got '" + printable(rig.name) + "'");
+  }
   if (root.has("description")) rig.description = root["description"].text();
   rig.dome_radius_mm = root["dome_radius_mm"].positive();
   if (root.has("object_position_mm")) rig.object_position_mm = root["object_position_mm"].vec3();
@@ -185,7 +203,7 @@ Rig parse_document(const Field& root, const std::string& source) {
   trigger.only_keys({"line", "active_low", "pulse_us"});
   rig.trigger.line = parse_line(trigger["line"]);
   if (trigger.has("active_low")) rig.trigger.line.active_low = trigger["active_low"].boolean();
-  if (trigger.has("pulse_us")) rig.trigger.pulse_us = trigger["pulse_us"].positive();
+  if (trigger.has("pulse_us")) rig.trigger.pulse_us = duration_us(trigger["pulse_us"]);
 
   if (root.has("strobe")) {
     const Field strobe = root["strobe"];
@@ -193,7 +211,7 @@ Rig parse_document(const Field& root, const std::string& source) {
     StrobeLine s;
     s.line = parse_line(strobe["line"]);
     if (strobe.has("active_low")) s.line.active_low = strobe["active_low"].boolean();
-    if (strobe.has("timeout_us")) s.timeout_us = strobe["timeout_us"].positive();
+    if (strobe.has("timeout_us")) s.timeout_us = duration_us(strobe["timeout_us"]);
     rig.strobe = s;
   }
 
@@ -223,7 +241,7 @@ Rig parse_document(const Field& root, const std::string& source) {
 }  // namespace
 
 std::string LineRef::describe() const {
-  return by_name() ? "line \"" + name + "\"" : "line " + std::to_string(offset);
+  return by_name() ? "line \"" + printable(name) + "\"" : "line " + std::to_string(offset);
 }
 
 const Led& Rig::led(int id) const {

@@ -1,5 +1,8 @@
 #include "lightstage/common/yaml_field.hpp"
 
+#include "lightstage/common/printable.hpp"
+#include "yaml_duplicate_keys.hpp"
+
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -8,7 +11,7 @@ namespace lightstage {
 
 void YamlField::error(const std::string& what) const {
   const int line = node_.Mark().line >= 0 ? node_.Mark().line + 1 : 0;
-  const std::string field = path_.empty() ? std::string() : "field '" + path_ + "': ";
+  const std::string field = path_.empty() ? std::string() : "field '" + printable(path_) + "': ";
   if (line > 0) fail("{}:{}: {}{}", source_, line, field, what);
   fail("{}: {}{}", source_, field, what);
 }
@@ -51,7 +54,7 @@ double YamlField::number() const {
   try {
     value = node_.as<double>();
   } catch (const YAML::Exception&) {
-    error("cannot read '" + node_.Scalar() + "' as a number");
+    error("cannot read '" + printable(node_.Scalar()) + "' as a number");
   }
   if (!std::isfinite(value)) error("must be a finite number");
   return value;
@@ -59,13 +62,13 @@ double YamlField::number() const {
 
 double YamlField::positive() const {
   const double value = number();
-  if (value <= 0) error("must be positive, got " + node_.Scalar());
+  if (value <= 0) error("must be positive, got " + printable(node_.Scalar()));
   return value;
 }
 
 double YamlField::non_negative() const {
   const double value = number();
-  if (value < 0) error("must not be negative, got " + node_.Scalar());
+  if (value < 0) error("must not be negative, got " + printable(node_.Scalar()));
   return value;
 }
 
@@ -74,7 +77,7 @@ int YamlField::integer() const {
   try {
     return node_.as<int>();
   } catch (const YAML::Exception&) {
-    error("cannot read '" + node_.Scalar() + "' as an integer");
+    error("cannot read '" + printable(node_.Scalar()) + "' as an integer");
   }
 }
 
@@ -83,7 +86,7 @@ bool YamlField::boolean() const {
   try {
     return node_.as<bool>();
   } catch (const YAML::Exception&) {
-    error("cannot read '" + node_.Scalar() + "' as true/false");
+    error("cannot read '" + printable(node_.Scalar()) + "' as true/false");
   }
 }
 
@@ -98,11 +101,14 @@ Vec3 YamlField::vec3() const {
 }
 
 YAML::Node load_yaml(const std::string& yaml_text, const std::string& source) {
+  YAML::Node root;
   try {
-    return YAML::Load(yaml_text);
+    root = YAML::Load(yaml_text);
   } catch (const YAML::ParserException& e) {
     fail("{}:{}: not valid YAML: {}", source, e.mark.line + 1, e.msg);
   }
+  refuse_duplicate_yaml_keys(yaml_text, source);
+  return root;
 }
 
 std::string read_text_file(const std::filesystem::path& path, const std::string& what) {

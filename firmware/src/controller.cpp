@@ -72,7 +72,7 @@ void Controller::fault(proto::Outcome why, const std::string& detail, const std:
   {
     const std::lock_guard lock(status_mutex_);
     status_.set_state(proto::Status::FAULT);
-    status_.set_last_fault(detail);
+    if (!gpio_failure_) status_.set_last_fault(detail);  // the backend's loss explains the rest
   }
   logger("firmware")->warn("fault ({}): {}", proto::Outcome_Name(why), detail);
   proto::ControllerMessage message;
@@ -86,7 +86,33 @@ void Controller::fault(proto::Outcome why, const std::string& detail, const std:
 
 void Controller::clear_fault() {
   const std::lock_guard lock(status_mutex_);
-  if (status_.state() == proto::Status::FAULT) status_.set_state(proto::Status::IDLE);
+  if (status_.state() == proto::Status::FAULT && !gpio_failure_) status_.set_state(proto::Status::IDLE);
+}
+
+void Controller::note_gpio_failure(const std::string& what) {
+  const std::lock_guard lock(status_mutex_);
+  if (gpio_failure_) return;  // the first failure is the one that explains
+  gpio_failure_ = what;
+  status_.set_state(proto::Status::FAULT);
+  status_.set_last_fault(fmt::format("GPIO backend lost: {}", what));
+}
+
+std::optional<std::string> Controller::gpio_failure() const {
+  const std::lock_guard lock(status_mutex_);
+  return gpio_failure_;
+}
+
+std::optional<Refusal> Controller::refuse_if_gpio_failed() const {
+  if (const auto failure = gpio_failure()) {
+    return Refusal{proto::Error::GPIO_ERROR,
+                   fmt::format("the GPIO backend failed ({}); lightstage-domed is shutting down", *failure)};
+  }
+  return std::nullopt;
+}
+
+void Controller::forget_sequences() {
+  sequences_.clear();
+  sequence_bytes_ = 0;
 }
 
 proto::Status Controller::status() const {
@@ -134,6 +160,7 @@ std::vector<int> Controller::darken_now() {
     off_ns = io_.leds->all_off(now);
   } catch (const std::exception& e) {
     logger("firmware")->critical("could not switch the LEDs off: {}", e.what());
+    note_gpio_failure(fmt::format("switching the LEDs off: {}", e.what()));
   }
   try {
     if (io_.trigger->asserted()) io_.trigger->release_at(clock_.now_ns());
@@ -151,6 +178,7 @@ std::vector<int> Controller::darken_now() {
 
 std::optional<Refusal> Controller::set_leds(const proto::SetLeds& request) {
   join_if_finished();
+  if (auto refusal = refuse_if_gpio_failed()) return refusal;
   if (sequence_running_) {
     return Refusal{proto::Error::BUSY,
                    fmt::format("sequence {} is running; abort it first", status().sequence_id())};
@@ -183,6 +211,7 @@ std::optional<Refusal> Controller::set_leds(const proto::SetLeds& request) {
   try {
     changed_ns = io_.leds->show(wanted, now);
   } catch (const std::exception& e) {
+    note_gpio_failure(fmt::format("setting LEDs: {}", e.what()));
     const std::vector<int> were_lit = darken_now();
     fault(proto::GPIO_ERROR, fmt::format("setting LEDs failed: {}", e.what()), were_lit);
     return Refusal{proto::Error::GPIO_ERROR, e.what()};
@@ -192,7 +221,8 @@ std::optional<Refusal> Controller::set_leds(const proto::SetLeds& request) {
     if (const auto it = held_.find(id); it != held_.end()) {
       next[id] = it->second;
     } else {
-      next[id] = {changed_ns, changed_ns + std::llround(allowed_us[id] * 1000.0)};
+      const double margin_us = std::min(options_.cutoff_margin_us, allowed_us[id] / 2);
+      next[id] = {changed_ns, changed_ns + std::llround((allowed_us[id] - margin_us) * 1000.0)};
     }
   }
   for (const auto& [id, held] : held_) {
@@ -239,29 +269,43 @@ void Controller::hold_job() {
       fault(proto::SAFETY_LIMIT, detail, expired);
     }
   } catch (const std::exception& e) {
+    note_gpio_failure(fmt::format("static LEDs: {}", e.what()));
     const std::vector<int> were_lit = darken_now();
     fault(proto::GPIO_ERROR, fmt::format("static LEDs: {}", e.what()), were_lit);
   }
 }
 
 std::optional<Refusal> Controller::upload(const proto::Sequence& sequence) {
+  if (auto refusal = refuse_if_gpio_failed()) return refusal;
   if (auto refusal = sequencer_.check(sequence)) return refusal;
-  if (!sequences_.contains(sequence.id()) && sequences_.size() >= options_.max_sequences) {
+  const auto replaced = sequences_.find(sequence.id());
+  if (replaced == sequences_.end() && sequences_.size() >= options_.max_sequences) {
     return Refusal{proto::Error::BAD_REQUEST,
                    fmt::format("sequence {}: the controller holds at most {} sequences; reuse an id",
                                sequence.id(), options_.max_sequences)};
+  }
+  const std::size_t bytes = sequence.ByteSizeLong();
+  const std::size_t freed = replaced == sequences_.end() ? 0 : replaced->second.ByteSizeLong();
+  if (sequence_bytes_ - freed + bytes > options_.max_sequence_bytes) {
+    return Refusal{
+        proto::Error::BAD_REQUEST,
+        fmt::format("sequence {}: {} bytes would make the stored sequences {} bytes, over the "
+                    "controller's {} byte limit; reuse an id",
+                    sequence.id(), bytes, sequence_bytes_ - freed + bytes, options_.max_sequence_bytes)};
   }
   if (sequence_running_ && status().sequence_id() == sequence.id()) {
     return Refusal{proto::Error::BUSY,
                    fmt::format("sequence {} is running; abort it before replacing it", sequence.id())};
   }
   sequences_[sequence.id()] = sequence;
+  sequence_bytes_ = sequence_bytes_ - freed + bytes;
   return std::nullopt;
 }
 
 std::optional<Refusal> Controller::run(std::uint32_t sequence_id, std::int64_t start_ns,
                                        const std::function<void()>& accepted) {
   join_if_finished();
+  if (auto refusal = refuse_if_gpio_failed()) return refusal;
   if (sequence_running_) {
     return Refusal{proto::Error::BUSY, fmt::format("sequence {} is running", status().sequence_id())};
   }
@@ -302,6 +346,7 @@ std::optional<Refusal> Controller::run(std::uint32_t sequence_id, std::int64_t s
       status_.set_state(is_safety_stop(done.outcome()) ? proto::Status::FAULT : proto::Status::IDLE);
       if (done.outcome() != proto::OK) status_.set_last_fault(done.detail());
     }
+    if (done.outcome() == proto::GPIO_ERROR) note_gpio_failure(fmt::format("sequence: {}", done.detail()));
     logger("firmware")
         ->info("sequence {} done: {} of {} steps, {}, max lateness {} us{}{}", done.sequence_id(),
                done.steps_run(), sequence.steps_size(), proto::Outcome_Name(done.outcome()),
@@ -323,7 +368,7 @@ void Controller::stop(proto::Outcome why, const std::string& detail) {
   } else if (was_running && is_safety_stop(why)) {
     const std::lock_guard lock(status_mutex_);
     status_.set_state(proto::Status::FAULT);
-    status_.set_last_fault(detail);
+    if (!gpio_failure_) status_.set_last_fault(detail);
   }
 }
 

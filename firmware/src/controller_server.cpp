@@ -1,6 +1,7 @@
 #include "lightstage/firmware/controller_server.hpp"
 
 #include "lightstage/common/log.hpp"
+#include "lightstage/common/rig_fingerprint.hpp"
 #include "lightstage/common/version.hpp"
 
 #include <fmt/format.h>
@@ -8,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <ctime>
 
 namespace lightstage::firmware {
 namespace {
@@ -22,6 +24,20 @@ proto::ControllerMessage ack(std::uint32_t request_id) {
 proto::ControllerMessage reply_to(std::uint32_t request_id, const std::optional<Refusal>& refusal) {
   if (!refusal) return ack(request_id);
   return error_reply(request_id, refusal->code, refusal->message);
+}
+
+std::string utc_time(std::chrono::system_clock::time_point t) {
+  const std::time_t seconds = std::chrono::system_clock::to_time_t(t);
+  std::tm parts{};
+  gmtime_r(&seconds, &parts);
+  std::array<char, 32> text{};
+  const std::size_t n = std::strftime(text.data(), text.size(), "%Y-%m-%dT%H:%M:%SZ", &parts);
+  return std::string(text.data(), n);
+}
+
+std::int64_t ms_between(std::chrono::steady_clock::time_point from,
+                        std::chrono::steady_clock::time_point to) {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(to - from).count();
 }
 
 }  // namespace
@@ -39,20 +55,25 @@ ControllerServer::ControllerServer(Controller& controller, ServerOptions options
     : controller_(controller), options_(std::move(options)) {}
 
 void ControllerServer::serve(LinkListener& listener, const std::atomic<bool>& stop) {
-  while (!stop) {
+  while (!stop && !controller_.gpio_failure()) {
     std::unique_ptr<ByteLink> link = listener.accept(std::chrono::milliseconds(50));
     if (link) serve_client(std::move(link), stop, &listener);
   }
   controller_.stop(proto::SHUTDOWN, "lightstage-domed shutting down");
 }
 
-void ControllerServer::refuse_extra_client(LinkListener& listener) {
+void ControllerServer::refuse_extra_client(LinkListener& listener, Session& holder) {
   std::unique_ptr<ByteLink> extra = listener.accept(std::chrono::milliseconds(0));
   if (!extra) return;
-  logger("firmware")->warn("{}: refused, another host is in control", extra->describe());
+  holder.contested = true;
+  const auto held_ms = ms_between(holder.connected, std::chrono::steady_clock::now());
+  const std::string why = fmt::format(
+      "another host controls this dome: {}, connected since {} ({} ms ago){}; try again later", holder.peer,
+      utc_time(holder.connected_wall), held_ms, holder.negotiated ? "" : ", no Hello yet");
+  logger("firmware")->warn("{}: refused: {}", extra->describe(), why);
   try {
     MessageChannel channel(std::move(extra));
-    channel.send(error_reply(0, proto::Error::BUSY, "another host controls this dome; try again later"));
+    channel.send(error_reply(0, proto::Error::BUSY, why));
     // Closing with the host's hello still unread would reset its connection
     // and lose the BUSY reply on its side: take what it sends until it hangs
     // up (it does on BUSY), for a moment at most.
@@ -65,44 +86,83 @@ void ControllerServer::refuse_extra_client(LinkListener& listener) {
   }
 }
 
+std::optional<std::string> ControllerServer::expired(const Session& session, const MessageChannel& channel,
+                                                     std::chrono::steady_clock::time_point now) const {
+  if (!session.negotiated) {
+    if (now - session.connected <= options_.hello_timeout) return std::nullopt;
+    if (channel.bytes_received() == 0 && !session.contested)
+      return std::nullopt;  // nobody there, nobody waiting
+    return fmt::format("no Hello within {} ms of connecting; hanging up", options_.hello_timeout.count());
+  }
+  const auto lease = std::max(options_.idle_lease, std::chrono::milliseconds(session.watchdog_ms));
+  if (now - session.last_message <= lease) return std::nullopt;
+  return fmt::format("no valid message for {} ms (lease {} ms); hanging up",
+                     ms_between(session.last_message, now), lease.count());
+}
+
 void ControllerServer::serve_client(std::unique_ptr<ByteLink> link, const std::atomic<bool>& stop,
                                     LinkListener* listener) {
-  const std::string peer = link->describe();
+  Session session;
+  session.peer = link->describe();
+  session.connected = std::chrono::steady_clock::now();
+  session.connected_wall = std::chrono::system_clock::now();
+  session.last_message = session.connected;
+  const std::string& peer = session.peer;
   logger("firmware")->info("{}: host connected", peer);
   MessageChannel channel(std::move(link));
   controller_.set_sink([&channel](const proto::ControllerMessage& message) { channel.send(message); });
-  Session session;
-  session.last_message = std::chrono::steady_clock::now();
+  // Sequences belong to the session that uploaded them.
+  struct ForgetSequences {
+    Controller& controller;
+    ~ForgetSequences() { controller.forget_sequences(); }
+  } forget{controller_};
   try {
-    while (!stop) {
+    while (!stop && !controller_.gpio_failure()) {
       proto::HostMessage request;
       bool received = false;
       try {
         received = channel.receive(request, kPoll);
       } catch (const ProtocolError& e) {
+        // Answered, but no proof of a live host: bytes that do not parse
+        // must not keep the watchdog or the lease fed.
         logger("firmware")->warn("{}", e.what());
-        session.last_message = std::chrono::steady_clock::now();  // the host is alive, if confused
         channel.send(error_reply(0, proto::Error::MALFORMED_FRAME, e.what()));
-        continue;
+        received = false;
       }
-      const auto now = std::chrono::steady_clock::now();
       if (received) {
-        session.last_message = now;
+        if (request.body_case() != proto::HostMessage::BODY_NOT_SET) {
+          session.last_message = std::chrono::steady_clock::now();
+        }
         if (auto reply = handle(request, session, channel)) channel.send(*reply);
-      } else if (session.watchdog_ms > 0 && controller_.active() &&
-                 now - session.last_message > std::chrono::milliseconds(session.watchdog_ms)) {
-        const auto silent_ms =
-            std::chrono::duration_cast<std::chrono::milliseconds>(now - session.last_message).count();
-        controller_.stop(proto::WATCHDOG,
-                         fmt::format("watchdog: no message from the host for {} ms (timeout {} ms)",
-                                     silent_ms, session.watchdog_ms));
       }
-      if (listener) refuse_extra_client(*listener);
+      // Checked after every message too, so that a flood of messages that
+      // prove nothing cannot keep the checks from running.
+      const auto now = std::chrono::steady_clock::now();
+      if (const auto why = expired(session, channel, now)) {
+        logger("firmware")->warn("{}: {}", peer, *why);
+        controller_.stop(proto::WATCHDOG, fmt::format("session of {} expired: {}", peer, *why));
+        channel.send(error_reply(0, proto::Error::SESSION_EXPIRED, *why));
+        controller_.set_sink({});
+        return;
+      }
+      if (session.watchdog_ms > 0 && controller_.active() &&
+          now - session.last_message > std::chrono::milliseconds(session.watchdog_ms)) {
+        controller_.stop(proto::WATCHDOG,
+                         fmt::format("watchdog: no valid message from the host for {} ms (timeout {} ms)",
+                                     ms_between(session.last_message, now), session.watchdog_ms));
+      }
+      if (listener) refuse_extra_client(*listener, session);
     }
   } catch (const LinkClosed& e) {
     logger("firmware")->info("{}: host disconnected ({})", peer, e.what());
     controller_.set_sink({});
     controller_.stop(proto::LINK_LOST, fmt::format("link to the host lost: {}", e.what()));
+    return;
+  }
+  if (const auto failure = controller_.gpio_failure()) {
+    logger("firmware")->critical("{}: GPIO backend lost ({}); no longer serving", peer, *failure);
+    controller_.stop(proto::GPIO_ERROR, fmt::format("GPIO backend lost: {}", *failure));
+    controller_.set_sink({});
     return;
   }
   // Stopped (SIGINT/SIGTERM): darken while the host can still hear why.
@@ -117,6 +177,7 @@ proto::ControllerMessage ControllerServer::info(const Session& session) const {
   info.set_protocol_version(session.version);
   info.set_firmware_version(kVersion);
   info.set_rig_name(rig.name);
+  info.set_rig_fingerprint(rig_fingerprint(rig));
   info.set_led_count(static_cast<std::uint32_t>(rig.leds.size()));
   for (const Led& led : rig.leds) {
     proto::Led& entry = *info.add_leds();

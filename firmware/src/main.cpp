@@ -3,8 +3,11 @@
 // LEDs within their limits whatever the host asks.
 //
 // Exit codes: 0 done (also after SIGINT/SIGTERM, with the dome dark);
-// 1 runtime failure (GPIO, link); 2 bad command line, rig or URI;
-// 3 --check found a problem with the rig's lines on the chip.
+// 1 runtime failure (link, a GPIO backend that cannot be opened);
+// 2 bad command line, rig or URI; 3 --check found a problem with the rig's
+// lines on the chip, or could not open the chip; 4 the GPIO backend failed
+// while serving (the LEDs were switched off as far as it still allowed):
+// systemd's Restart= and the unit's ExecStopPost --dark take over.
 #include "lightstage/common/clock.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
@@ -36,6 +39,17 @@
 namespace {
 
 namespace fw = lightstage::firmware;
+
+constexpr int kExitCheckFailed = 3;
+constexpr int kExitGpioLost = 4;
+
+struct DaemonSettings {
+  unsigned watchdog_ms = 1000;
+  unsigned hello_timeout_ms = 5000;
+  unsigned idle_lease_ms = 30'000;
+  double cutoff_margin_us = 2000;
+  bool realtime = true;
+};
 
 std::atomic<bool> g_stop{false};
 static_assert(std::atomic<bool>::is_always_lock_free, "set from a signal handler");
@@ -86,8 +100,18 @@ void print_rig_summary(const lightstage::Rig& rig, const std::string& rig_path) 
 
 // --check against a chip: every line exists and is free.
 int check_lines(const lightstage::Rig& rig, const std::string& gpio_uri) {
-  const auto chip = fw::open_gpio_chip(gpio_uri);
-  const lightstage::gpio::ChipInfo info = chip->info();
+  std::unique_ptr<lightstage::gpio::Chip> chip;
+  lightstage::gpio::ChipInfo info;
+  try {
+    chip = fw::open_gpio_chip(gpio_uri);
+    info = chip->info();
+  } catch (const lightstage::InputError&) {
+    throw;  // a malformed URI is a command-line error (2)
+  } catch (const std::exception& e) {
+    // No chip is the first missing line.
+    fmt::print("{}: cannot open the chip: {}\n1 problem(s)\n", gpio_uri, e.what());
+    return kExitCheckFailed;
+  }
   int problems = 0;
   int leds_ok = 0;
   fmt::print("{}: chip \"{}\", {} lines\n", gpio_uri, info.label, info.line_names.size());
@@ -105,15 +129,16 @@ int check_lines(const lightstage::Rig& rig, const std::string& gpio_uri) {
   if (leds_ok > 0) fmt::print("  {} LED line(s) ok\n", leds_ok);
   fmt::print("{}\n",
              problems ? fmt::format("{} problem(s)", problems) : std::string("all lines present and free"));
-  return problems ? 3 : 0;
+  return problems ? kExitCheckFailed : 0;
 }
 
 int run_daemon(const lightstage::Rig& rig, const std::string& gpio_uri, const std::string& listen_uri,
-               unsigned watchdog_ms, bool realtime) {
+               const DaemonSettings& settings) {
   auto log = lightstage::logger("firmware");
   fw::ControllerOptions options;
-  options.realtime = realtime;
-  if (realtime) {
+  options.realtime = settings.realtime;
+  options.cutoff_margin_us = settings.cutoff_margin_us;
+  if (settings.realtime) {
     const fw::RealtimeResult locked = fw::lock_memory();
     options.memory_locked = locked.ok;
     if (!locked.ok) log->warn("memory not locked: {}; page faults may delay deadlines", locked.problem);
@@ -123,15 +148,22 @@ int run_daemon(const lightstage::Rig& rig, const std::string& gpio_uri, const st
   fw::Controller controller(rig, fw::open_dome_io(rig, *chip, clock), clock, options);
   const auto listener = listen_on(listen_uri);
   fw::ServerOptions server_options;
-  server_options.default_watchdog_ms = watchdog_ms;
-  server_options.max_watchdog_ms = std::max<unsigned>(server_options.max_watchdog_ms, watchdog_ms);
+  server_options.default_watchdog_ms = settings.watchdog_ms;
+  server_options.max_watchdog_ms = std::max<unsigned>(server_options.max_watchdog_ms, settings.watchdog_ms);
   server_options.gpio_uri = gpio_uri;
+  server_options.hello_timeout = std::chrono::milliseconds(settings.hello_timeout_ms);
+  server_options.idle_lease = std::chrono::milliseconds(settings.idle_lease_ms);
   fw::ControllerServer server(controller, server_options);
   log->info("rig '{}' on {}: {} LEDs, strobe {}, real-time {}", rig.name, gpio_uri, rig.leds.size(),
             controller.has_strobe() ? "yes" : "no", controller.realtime() ? "yes" : "no");
   fmt::print("lightstage-domed: listening on {}\n", listening_uri(*listener, listen_uri));
   std::fflush(stdout);
   server.serve(*listener, g_stop);
+  if (const auto failure = controller.gpio_failure()) {
+    std::cerr << "lightstage-domed: the GPIO backend failed: " << *failure << "\n";
+    log->critical("exiting with status {}: GPIO backend lost", kExitGpioLost);
+    return kExitGpioLost;
+  }
   log->info("stopped by signal; every LED dark");
   return 0;
 }
@@ -143,7 +175,7 @@ int main(int argc, char** argv) {
   std::string rig_path = lightstage::default_rig_path().string();
   std::string gpio_uri;
   std::string listen_uri;
-  unsigned watchdog_ms = 1000;
+  DaemonSettings settings;
   std::string log_level = "info";
   bool check = false;
   bool dark = false;
@@ -154,9 +186,22 @@ int main(int argc, char** argv) {
                  "GPIO backend: gpiod:CHIP (path, name, label or a line name) or sim:SOCKET");
   app.add_option("--listen", listen_uri,
                  "where hosts connect: tcp:HOST:PORT, unix:PATH, serial:DEV, ffs:DIR");
-  app.add_option("--watchdog-ms", watchdog_ms, "heartbeat timeout when the host asks for none")
+  app.add_option("--watchdog-ms", settings.watchdog_ms, "heartbeat timeout when the host asks for none")
       ->capture_default_str()
       ->check(CLI::Range(20u, 60'000u));
+  app.add_option("--hello-timeout-ms", settings.hello_timeout_ms,
+                 "hang up on a connection that has not sent Hello within this")
+      ->capture_default_str()
+      ->check(CLI::Range(100u, 600'000u));
+  app.add_option("--idle-lease-ms", settings.idle_lease_ms,
+                 "hang up on (and darken for) a host that sends no valid message for this long "
+                 "(at least its watchdog timeout)")
+      ->capture_default_str()
+      ->check(CLI::Range(100u, 3'600'000u));
+  app.add_option("--cutoff-margin-us", settings.cutoff_margin_us,
+                 "switch a static LED off this long before its on-time limit (late wake-ups)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e6));
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error, off")->capture_default_str();
   app.add_flag("--check", check, "validate the rig (and, with --gpio, its lines on the chip), then exit");
   app.add_flag("--dark", dark, "drive every LED line of the rig inactive on --gpio, then exit");
@@ -194,7 +239,8 @@ int main(int argc, char** argv) {
       std::cerr << "lightstage-domed: --listen is required (tcp:HOST:PORT, unix:PATH, serial:DEV, ffs:DIR)\n";
       return 2;
     }
-    return run_daemon(rig, gpio_uri, listen_uri, watchdog_ms, !no_realtime);
+    settings.realtime = !no_realtime;
+    return run_daemon(rig, gpio_uri, listen_uri, settings);
   } catch (const lightstage::InputError& e) {
     std::cerr << "lightstage-domed: " << e.what() << "\n";
     return 2;

@@ -344,7 +344,15 @@ std::optional<Refusal> Sequencer::check(const proto::Sequence& sequence) const {
 }
 
 std::optional<Refusal> Sequencer::check_run(const proto::Sequence& sequence, std::int64_t start_ns) const {
-  return check_against(sequence, std::max(start_ns, clock_.now_ns()), safety_);
+  const std::int64_t now_ns = clock_.now_ns();
+  if (start_ns > now_ns && start_ns - now_ns > kMaxStartAheadNs) {
+    return Refusal{
+        proto::Error::BAD_REQUEST,
+        fmt::format("sequence {}: start_ns {} is {:.0f} s ahead of the controller's clock (at most {} s)",
+                    sequence.id(), start_ns, static_cast<double>(start_ns - now_ns) * 1e-9,
+                    kMaxStartAheadNs / 1'000'000'000)};
+  }
+  return check_against(sequence, std::max(start_ns, now_ns), safety_);
 }
 
 std::optional<Refusal> Sequencer::check_against(const proto::Sequence& sequence, std::int64_t start_ns,

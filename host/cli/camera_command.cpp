@@ -11,7 +11,6 @@
 
 #include <fmt/format.h>
 
-#include <cmath>
 #include <memory>
 
 namespace lightstage::cli {
@@ -29,25 +28,23 @@ struct BracketArgs {
   CaptureOptions options;
 };
 
-void add_bracket_options(CLI::App* sub, BracketArgs& args) {
+void add_bracket_options(CLI::App* sub, BracketArgs& args, const char* default_bracket) {
   sub->add_option("--rig", args.rig, "rig description (YAML)")->capture_default_str();
   sub->add_option("--controller", args.controller, "controller URI")->required();
   sub->add_option("--camera", args.camera, "camera URI")->required();
   sub->add_option("--led", args.led, "the LED lighting the still scene (default: the rig's first)");
-  sub->add_option("--exposures-us", args.exposures,
-                  "the bracket (default: 8 exposures doubling from 1/16 of the rig camera's)")
+  sub->add_option("--exposures-us", args.exposures, fmt::format("the bracket (default: {})", default_bracket))
       ->delimiter(',');
   sub->add_option("--loop", args.options.loop, "open, closed or auto")->capture_default_str();
 }
 
-// The bracket: frames of one LED at each exposure.
-std::vector<cv::Mat> take_bracket(BracketArgs& args, std::vector<double>& exposures, int& bits) {
+// The bracket: frames of one LED at each exposure (given, or `default_bracket` of the rig camera's).
+std::vector<cv::Mat> take_bracket(BracketArgs& args, std::vector<double>& exposures, int& bits,
+                                  std::vector<double> (*default_bracket)(double reference_us)) {
   const Rig rig = load_rig(args.rig);
   if (args.led < 0) args.led = rig.leds.front().id;
   exposures = args.exposures;
-  if (exposures.empty()) {
-    for (int i = 0; i < 8; ++i) exposures.push_back(rig.camera.exposure_us / 16 * std::exp2(i));
-  }
+  if (exposures.empty()) exposures = default_bracket(rig.camera.exposure_us);
   hw::register_hw_cameras();
   sim::register_sim_camera();
   auto camera = camera::open_camera_uri(args.camera);
@@ -80,12 +77,12 @@ void add_camera(CLI::App& app) {
       "as JSON (--out), for `capture --response`; prints the linearity after linearisation.\n"
       "Example: lightstage camera response --controller unix:/tmp/domed.sock --camera sim:/tmp/cam.sock "
       "--out response.json");
-  add_bracket_options(calibrate, *response);
+  add_bracket_options(calibrate, *response, "8 exposures doubling from 1/16 of the rig camera's");
   calibrate->add_option("--out", response->out, "response file to write")->required();
   calibrate->callback([response] {
     std::vector<double> exposures;
     int bits = 16;
-    const auto images = take_bracket(*response, exposures, bits);
+    const auto images = take_bracket(*response, exposures, bits, response_bracket_us);
     const InverseResponse curve = calibrate_response(images, exposures, bits);
     curve.save(response->out);
     // Linearity over the middle three exposures, where most pixels are well exposed in all of them.
@@ -112,13 +109,13 @@ void add_camera(CLI::App& app) {
       "How linear the camera is (with --response: after linearisation): prints radiance/exposure per\n"
       "exposure of the bracket, relative to the median, for pixels well inside the range in every frame.\n"
       "Example: lightstage camera linearity --controller unix:/tmp/domed.sock --camera sim:/tmp/cam.sock");
-  add_bracket_options(check, *linearity);
+  add_bracket_options(check, *linearity, "5 exposures half a stop apart from 1/2 to 2x the rig camera's");
   check->add_option("--response", linearity->response, "inverse response to apply first");
   check->add_flag("--json", linearity->json, "print the report as JSON");
   check->callback([linearity] {
     std::vector<double> exposures;
     int bits = 16;
-    const auto images = take_bracket(*linearity, exposures, bits);
+    const auto images = take_bracket(*linearity, exposures, bits, linearity_bracket_us);
     const InverseResponse curve = linearity->response.empty() ? InverseResponse::identity(bits)
                                                               : InverseResponse::load(linearity->response);
     const LinearityReport report = check_linearity(images, exposures, curve);

@@ -31,6 +31,8 @@ void add_capture(CLI::App& app) {
       "or chosen per LED from a preview pass (auto); dark frames per exposure are subtracted pixel by "
       "pixel.\n"
       "--bracket takes every LED at several exposures and merges them into one HDR frame (float PFM).\n"
+      "Every exposure is checked against its LED's on-time limit before anything is taken; a full disk\n"
+      "stops the capture (ENOSPC) with the stack on disk whole, for --resume.\n"
       "Example: lightstage capture --controller unix:/run/lightstage/domed.sock --camera v4l2:/dev/video0 "
       "--out scans/coin");
   sub->add_option("--rig", args->rig, "rig description (YAML)")->capture_default_str();
@@ -38,7 +40,9 @@ void add_capture(CLI::App& app) {
   sub->add_option("--camera", args->camera, "camera URI: v4l2:/dev/videoN, libcamera:ID, sim:PATH")
       ->required();
   sub->add_option("--out", args->options.out, "stack folder to write")->required();
-  sub->add_flag("--resume", args->options.resume, "complete the interrupted capture in --out");
+  sub->add_flag("--resume", args->options.resume,
+                "complete the interrupted capture in --out (same LEDs, --bracket, --exposure-us and "
+                "--dark-frames as planned)");
   sub->add_option("--exposure-us", args->exposure, "exposure in us, or auto (per LED, from a preview)")
       ->capture_default_str();
   sub->add_option("--auto-target", args->options.auto_target,

@@ -4,13 +4,14 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/controller/controller_client.hpp"
+#include "lightstage/host/controller/led_hold.hpp"
 #include "lightstage/host/controller/sequences.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <memory>
-#include <thread>
 
 namespace lightstage::cli {
 namespace {
@@ -117,6 +118,24 @@ void run_test_sequence(const CtlArgs& args) {
                             run.done.detail()));
 }
 
+// Lights the LEDs for --hold-ms; a fault on the way is printed and fails the command.
+void hold_leds(const CtlArgs& args) {
+  std::vector<std::pair<std::uint32_t, float>> levels;
+  for (const std::uint32_t id : args.on) levels.emplace_back(id, args.level);
+  const LedHold hold = lightstage::hold_leds(*connect(args), levels, std::chrono::milliseconds(args.hold_ms));
+  if (args.json) {
+    const nlohmann::json fault = hold.faulted ? nlohmann::json(hold.fault) : nlohmann::json();
+    fmt::print("{}\n",
+               nlohmann::json{
+                   {"leds", args.on}, {"hold_ms", args.hold_ms}, {"held_ms", hold.held_ms}, {"fault", fault}}
+                   .dump(2));
+  }
+  if (hold.faulted) {
+    throw Error(fmt::format("the controller switched the LEDs off after {} ms of the {} ms asked: {}",
+                            hold.held_ms, args.hold_ms, hold.fault));
+  }
+}
+
 }  // namespace
 
 void add_ctl(CLI::App& app) {
@@ -165,21 +184,15 @@ void add_ctl(CLI::App& app) {
 
   CLI::App* leds = ctl->add_subcommand(
       "leds",
-      "Light the given LEDs (all others dark) for --hold-ms, then darken the dome.\n"
+      "Light the given LEDs (all others dark) for --hold-ms, then darken the dome. When the controller\n"
+      "switches them off sooner (an LED's on-time limit), prints its fault and exits non-zero.\n"
       "Example: lightstage ctl --controller unix:/tmp/domed.sock leds --on 3,17 --hold-ms 2000");
   leds->add_option("--on", args->on, "LED ids to light (none: all dark)")->delimiter(',');
   leds->add_option("--level", args->level, "level 0..1 (drivers without dimming accept 1 only)")
       ->capture_default_str()
       ->check(CLI::Range(0.0f, 1.0f));
   leds->add_option("--hold-ms", args->hold_ms, "how long to keep them lit")->capture_default_str();
-  leds->callback([args] {
-    auto client = connect(*args);
-    std::vector<std::pair<std::uint32_t, float>> levels;
-    for (const std::uint32_t id : args->on) levels.emplace_back(id, args->level);
-    client->set_leds(levels);
-    std::this_thread::sleep_for(std::chrono::milliseconds(args->hold_ms));
-    client->all_off();
-  });
+  leds->callback([args] { hold_leds(*args); });
 
   CLI::App* test = ctl->add_subcommand(
       "run-test-sequence",

@@ -86,9 +86,12 @@ void add_solve_flags(CLI::App& sub, pipeline::SolveSettings& args) {
   sub.add_option("--method", args.method, "solver (docs/solvers.md):" + methods)
       ->check(CLI::IsMember(pipeline::solve_method_names()))
       ->capture_default_str();
-  sub.add_option("--shadow-threshold", args.shadow_threshold,
-                 "drop observations at or below T (values after division by full scale and light intensity); "
-                 "l2: -1 (default) keeps all; other methods: default 1e-6, ~0.02 suits real captures");
+  sub.add_option(
+      "--shadow-threshold", args.shadow_threshold,
+      "drop observations at or below T (values after division by full scale and light intensity); "
+      "l2: -1 (default) keeps all; other methods: default estimated from the stack (its dark frames or "
+      "black level and the noise floor of its darkest observations; summary.json "
+      "parameters.shadow_threshold_choice)");
   sub.add_option("--t-low", args.t_low,
                  "keep the lowest fraction F of each pixel's remaining observations (default: l2 1, robust "
                  "0.5, bi-polynomial and auto 0.25)");

@@ -1,11 +1,8 @@
 // `lightstage reflectance`: fit reflectance models to a stack with known normals.
 #include "commands.hpp"
-#include "lightstage/common/error.hpp"
 #include "lightstage/pipeline/reflectometry_folder.hpp"
 
 #include <fmt/format.h>
-
-#include <fstream>
 
 namespace lightstage::cli {
 
@@ -42,6 +39,7 @@ void add_reflectance(CLI::App& app) {
     settings.normals = args->normals;
     settings.samples = args->samples;
     settings.clamp_to_one = !args->no_clamp;
+    settings.out = args->out;
     const pipeline::ReflectometryReport report = pipeline::fit_stack_reflectance(settings);
     const nlohmann::json& result = report.json;
     const auto& fits = report.fits;
@@ -52,12 +50,6 @@ void add_reflectance(CLI::App& app) {
                  report.samples, "model", "RMSE", "MAE", "RMSE / mean");
       for (const auto& fit : fits)
         fmt::print("{:<14}{:>12.5f}{:>12.5f}{:>14.4f}\n", fit.model, fit.rmse, fit.mae, fit.relative_rmse);
-    }
-    if (!args->out.empty()) {
-      std::filesystem::create_directories(args->out);
-      std::ofstream file(std::filesystem::path(args->out) / "reflectance.json");
-      file << result.dump(2) << "\n";
-      if (!file) fail("{}: cannot write", (std::filesystem::path(args->out) / "reflectance.json").string());
     }
   });
 }

@@ -63,6 +63,7 @@ void add_simulate(CLI::App& app) {
   struct Args {
     std::string rig = default_rig_path().string();
     std::string out;
+    bool force = false;
     OutputFlags output;
     SimulateArgs sim;
     NaturalArgs natural;
@@ -82,7 +83,8 @@ void add_simulate(CLI::App& app) {
       "(--prior-beta), and prints the `solve --method shape-prior` command that fits it.\n"
       "\n"
       "Input: a rig (YAML) and a scene preset or scene file (docs/scene-format.md).\n"
-      "Output, in --out: the stack in the DiLiGenT layout (filenames.txt, 16-bit PNGs, "
+      "Output, in --out (a new or empty folder; --force to write over one): the stack in the DiLiGenT layout "
+      "(filenames.txt, 16-bit PNGs, "
       "light_directions.txt, light_intensities.txt, mask.png), ground truth (Normal_gt.png, depth_gt.pfm) "
       "and manifest.json (docs/stack-format.md). Prints one line (or --json, a summary).\n"
       "\n"
@@ -91,7 +93,10 @@ void add_simulate(CLI::App& app) {
       "  lightstage simulate --scene bunny --lighting natural --frames 40 --width 128 --height 128 --out "
       "out/natural");
   sub->add_option("--rig", args->rig, "rig description (YAML)")->capture_default_str();
-  sub->add_option("--out", args->out, "output stack folder")->required();
+  sub->add_option("--out", args->out, "output stack folder (new or empty)")->required();
+  sub->add_flag("--force", args->force,
+                "write into an --out that is not empty: the stack's files replace theirs, nothing else is "
+                "removed");
   add_simulate_flags(*sub, args->sim);
   sub->add_option("--lighting", args->natural.lighting,
                   "dome (one LED per frame) or natural (random natural lighting per frame, unknown to the "
@@ -124,15 +129,16 @@ void add_simulate(CLI::App& app) {
     if (args->natural.lighting == "natural") {
       Progress progress("simulate", static_cast<std::size_t>(args->natural.frames), "frames",
                         args->output.mode());
-      summary =
-          pipeline::simulate_natural_to_folder(args->rig, args->sim.options, args->natural, args->out,
-                                               [&progress](std::size_t frames) { progress.advance(frames); });
+      summary = pipeline::simulate_natural_to_folder(
+          args->rig, args->sim.options, args->natural, args->out,
+          [&progress](std::size_t frames) { progress.advance(frames); }, args->force);
       progress.finish();
     } else {
       const Rig rig = load_rig(args->rig);
       Progress progress("simulate", rig.leds.size(), "frames", args->output.mode());
-      summary = pipeline::simulate_to_folder(args->rig, args->sim.options, args->out,
-                                             [&progress](std::size_t frames) { progress.advance(frames); });
+      summary = pipeline::simulate_to_folder(
+          args->rig, args->sim.options, args->out,
+          [&progress](std::size_t frames) { progress.advance(frames); }, args->force);
       progress.finish();
       summary["lighting"] = "dome";
     }

@@ -11,6 +11,21 @@
 #include <memory>
 
 namespace lightstage::cli {
+namespace {
+
+// The line that says which shadow threshold the solve used and where it came from.
+std::string describe_shadow_threshold(const nlohmann::json& choice, const std::string& method) {
+  ShadowThreshold threshold;
+  threshold.value = choice.value("value", 0.0);
+  threshold.source = choice.value("source", std::string{});
+  threshold.level = choice.value("level", 0.0);
+  threshold.noise = choice.value("noise", 0.0);
+  if (method == "l2" && !choice.value("used_by_l2", false))
+    return "l2 keeps every observation (the published baseline); estimated " + threshold.describe();
+  return threshold.describe();
+}
+
+}  // namespace
 
 void add_solve(CLI::App& app) {
   struct Args {
@@ -34,7 +49,7 @@ void add_solve(CLI::App& app) {
       "(method, counts, time, and the angular error when the stack holds Normal_gt.png) and report.html.\n"
       "Prints the angular error against the ground truth when there is one (or --json, summary.json).\n"
       "\n"
-      "Example: lightstage solve --input out/stack --method robust --shadow-threshold 0.02 --out out/result");
+      "Example: lightstage solve --input out/stack --method robust --out out/result");
   sub->add_option("--input", args->input, "stack folder")->required();
   sub->add_option("--out", args->out, "output folder")->required();
   add_solve_flags(*sub, args->solve);
@@ -52,13 +67,13 @@ void add_solve(CLI::App& app) {
     std::unique_ptr<Progress> progress;
     const auto report = pipeline::solve_folder(
         args->input, args->solve.radiometry,
-        [&](const Observations& observations) {
-          const pipeline::SolveWork work = pipeline::solve_work(args->solve, observations);
+        [&](const pipeline::SolveInput& prepared) {
+          const pipeline::SolveWork work = pipeline::solve_work(args->solve, prepared.observations);
           progress = std::make_unique<Progress>("solve " + args->solve.method, work.total, work.unit,
                                                 args->output.mode());
           pipeline::SolveSettings solve = args->solve;
           solve.set_progress([p = progress.get()](std::size_t items) { p->advance(items); });
-          SolveResult result = pipeline::solve_with(observations, solve);
+          SolveResult result = pipeline::solve_with(prepared.observations, solve, prepared.shadow);
           progress->finish();
           return result;
         },
@@ -74,6 +89,9 @@ void add_solve(CLI::App& app) {
       fmt::print("{}: solved {} of {} pixels in {:.2f} s -> {}\n", s.value("method", args->solve.method),
                  s.value("pixels_solved", std::size_t{0}), s.value("pixels_in_mask", std::size_t{0}), seconds,
                  args->out);
+      if (const auto choice = s["parameters"].find("shadow_threshold_choice");
+          choice != s["parameters"].end())
+        fmt::print("{}\n", describe_shadow_threshold(*choice, args->solve.method));
       if (report.error) fmt::print("{}\n", report.error->describe());
     }
   });

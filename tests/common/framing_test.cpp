@@ -180,6 +180,63 @@ TEST(Framing, FrameCutShortIsDroppedWhenACompleteFrameFollows) {
   EXPECT_EQ(out.frames, std::vector<Bytes>{bytes_of("hello again")});
 }
 
+// Two senders that died mid-frame one after the other: the complete frame
+// after both must come out as soon as it is in, not once the first cut
+// frame's declared length has arrived.
+TEST(Framing, TwoFramesCutShortInARowDoNotHideTheNextFrame) {
+  const Bytes first = encode_frame(Bytes(100'000, 0x11));
+  const Bytes second = encode_frame(Bytes(5'000, 0x22));
+  FrameDecoder decoder;
+  decoder.feed(std::span(first).first(300));
+  decoder.feed(std::span(second).first(40));
+  EXPECT_FALSE(decoder.next().has_value());
+  decoder.feed(encode_frame(bytes_of("still listening")));
+  const Drained out = drain(decoder);
+  ASSERT_EQ(out.errors.size(), 1u);
+  EXPECT_NE(out.errors[0].find("dropped 340 byte(s)"), std::string::npos) << out.errors[0];
+  EXPECT_NE(out.errors[0].find("cut short"), std::string::npos) << out.errors[0];
+  EXPECT_EQ(out.frames, std::vector<Bytes>{bytes_of("still listening")});
+  EXPECT_EQ(decoder.buffered(), 0u);
+}
+
+// Thousands of short cut frames in small reads (a hostile or broken sender),
+// then a good frame: it is found the moment it has arrived.
+TEST(Framing, ManyCutFramesThenAGoodOneFedInSmallReads) {
+  Bytes wire;
+  const Bytes big = encode_frame(Bytes(kMaxPayload, 0x33));
+  wire.insert(wire.end(), big.begin(), big.begin() + 64);
+  const Bytes partial = encode_frame(Bytes(200, 0x44));
+  for (int i = 0; i < 3000; ++i) wire.insert(wire.end(), partial.begin(), partial.begin() + 30);
+  FrameDecoder decoder;
+  for (std::size_t at = 0; at < wire.size(); at += 256) {
+    decoder.feed(std::span(wire).subspan(at, std::min<std::size_t>(256, wire.size() - at)));
+    const Drained out = drain(decoder);
+    ASSERT_TRUE(out.frames.empty());
+  }
+  decoder.feed(encode_frame(bytes_of("hello")));
+  const Drained out = drain(decoder);
+  EXPECT_EQ(out.frames, std::vector<Bytes>{bytes_of("hello")});
+  EXPECT_EQ(decoder.buffered(), 0u);
+}
+
+// A frame abandoned (its sender went quiet) is reported with how much of it
+// came, and a frame that began inside it is still found.
+TEST(Framing, AbandonedPartialFrameIsReportedAndTheDecoderResynchronises) {
+  FrameDecoder decoder;
+  EXPECT_FALSE(decoder.abandon_partial().has_value());
+  const Bytes cut = encode_frame(Bytes(1000, 0x55));
+  const Bytes good = encode_frame(bytes_of("after the gap"));
+  decoder.feed(std::span(cut).first(100));
+  decoder.feed(std::span(good).first(5));
+  EXPECT_FALSE(decoder.next().has_value());
+  const auto report = decoder.abandon_partial();
+  ASSERT_TRUE(report.has_value());
+  EXPECT_NE(report->error.find("105 of the 1010 bytes"), std::string::npos) << report->error;
+  decoder.feed(std::span(good).subspan(5));
+  const Drained out = drain(decoder);
+  EXPECT_EQ(out.frames, std::vector<Bytes>{bytes_of("after the gap")});
+}
+
 // The look-ahead must not break a long frame whose payload holds magic bytes
 // and frame-like headers (here with wrong CRCs), arriving a few bytes at a time.
 TEST(Framing, LongFrameWithFrameLikeBytesInsideArrivesIntact) {

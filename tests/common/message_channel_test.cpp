@@ -245,6 +245,29 @@ TEST(MessageChannel, HelloAfterAFrameCutShortGetsThrough) {
   EXPECT_EQ(received.request_id(), 1u);
 }
 
+// A peer that stops mid-frame costs a bounded wait: the frame begun is given
+// up (a ProtocolError) after the partial-frame timeout without a byte, and
+// the next message gets through.
+TEST(MessageChannel, FrameAbandonedMidWayIsAProtocolErrorAfterTheTimeout) {
+  auto owned = std::make_unique<ScriptedLink>();
+  ScriptedLink& link = *owned;
+  MessageChannel channel(std::move(owned), 100ms);
+  const Bytes cut = frame_of_bytes(Bytes(5000, 0x66));
+  link.deliver(Bytes(cut.begin(), cut.begin() + 50));
+  proto::HostMessage message;
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    channel.receive(message, 5s);
+    FAIL() << "a frame cut short was waited for";
+  } catch (const ProtocolError& e) {
+    EXPECT_NE(std::string(e.what()).find("abandoned 50 of the 5010 bytes"), std::string::npos) << e.what();
+  }
+  EXPECT_LT(std::chrono::steady_clock::now() - start, 4s) << "gave up only at the receive timeout";
+  link.deliver(frame_of(heartbeat(7)));
+  ASSERT_TRUE(channel.receive(message, 1s));
+  EXPECT_EQ(message.heartbeat().counter(), 7u);
+}
+
 TEST(MessageChannel, EmptyPayloadIsAnEmptyMessage) {
   ScriptedChannel c;
   c.link->deliver(frame_of_bytes({}));

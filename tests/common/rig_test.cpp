@@ -133,6 +133,68 @@ TEST(Rig, ChainBitsAreCheckedAgainstTheChain) {
   expect_rig_error(replace(chained, "clock: 21", "clock: 20"), {"chains[0]", "line 20", "data"});
 }
 
+TEST(Rig, DuplicateKeysAreRefusedWithBothLines) {
+  // A second, tighter limit must not be silently ignored (yaml-cpp's lookups find the first).
+  expect_rig_error(replace(kMinimalRig, "max_duty: 0.5}", "max_duty: 0.5, max_on_us: 10}"),
+                   {"broken.yaml:6", "duplicate key 'led_defaults.limits.max_on_us'", "first at line 6"});
+  expect_rig_error(
+      replace(kMinimalRig, "trigger: {line: 10}\n", "trigger: {line: 10}\ndome_radius_mm: 200\n"),
+      {"broken.yaml:5", "duplicate key 'dome_radius_mm'", "first at line 2"});
+  expect_rig_error(replace(kMinimalRig, "{id: 1, line: 1,", "{id: 1, line: 1, line: 7,"),
+                   {"broken.yaml:9", "duplicate key 'leds[1].line'", "first at line 9"});
+  expect_rig_error(replace(kMinimalRig, "  limits: {max_on_us: 1000, max_duty: 0.5}\n",
+                           "  limits:\n    max_on_us: 1000\n    max_duty: 0.5\n    max_on_us: 10\n"),
+                   {"broken.yaml:9", "led_defaults.limits.max_on_us", "first at line 7"});
+  // The same key in different mappings is no duplicate.
+  EXPECT_NO_THROW(parse_rig(replace(kMinimalRig, "{id: 1, line: 1,", "{id: 1, line: {line: 1},"), "ok.yaml"));
+}
+
+TEST(Rig, DurationsAreRangeChecked) {
+  // 1e30 us would overflow the firmware's int64 nanoseconds.
+  expect_rig_error(replace(kMinimalRig, "max_on_us: 1000", "max_on_us: 1e30"),
+                   {"broken.yaml:6", "led_defaults.limits.max_on_us", "at most 3600000000 us", "1e30"});
+  expect_rig_error(
+      replace(kMinimalRig, "trigger: {line: 10}", "trigger: {line: 10, pulse_us: 99999999999999}"),
+      {"broken.yaml:4", "trigger.pulse_us", "at most"});
+  expect_rig_error(
+      replace(kMinimalRig, "trigger: {line: 10}", "trigger: {line: 10}\nstrobe: {line: 11, timeout_us: 4e9}"),
+      {"strobe.timeout_us", "at most"});
+  expect_rig_error(replace(kMinimalRig, "max_duty: 0.5}", "max_duty: 0.5, duty_window_us: 1e12}"),
+                   {"led_defaults.limits.duty_window_us", "at most"});
+  expect_rig_error(replace(kMinimalRig, "height: 48}", "height: 48, exposure_us: 1e19}"),
+                   {"camera.exposure_us", "at most"});
+  expect_rig_error(replace(kMinimalRig, "leds:\n",
+                           "chains:\n  - {name: c, data: 20, clock: 21, latch: 22, length: 8, "
+                           "clock_period_us: 1e300}\nleds:\n"),
+                   {"chains[0].clock_period_us", "at most"});
+  const Rig longest = parse_rig(replace(kMinimalRig, "max_on_us: 1000", "max_on_us: 3600000000"), "ok.yaml");
+  EXPECT_DOUBLE_EQ(longest.leds[0].limits.max_on_us, kMaxRigDurationUs);
+  // The firmware converts with llround(us * 1000): the cap must stay far inside int64.
+  EXPECT_LT(kMaxRigDurationUs * 1000.0, 1e18);
+}
+
+TEST(Rig, QuotedValuesAreEscapedAndCut) {
+  const std::string huge(100000, 'x');
+  try {
+    parse_rig(replace(kMinimalRig, "dome_radius_mm: 300", "dome_radius_mm: " + huge), "broken.yaml");
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    EXPECT_LT(message.size(), 300u) << message.size();
+    EXPECT_NE(message.find("xxx..."), std::string::npos) << message;
+  }
+  // A terminal escape in the rig name is refused, and shown escaped, not raw.
+  try {
+    parse_rig(replace(kMinimalRig, "name: tiny", "name: \"ti\\e[2Jny\""), "broken.yaml");
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.find('\x1b'), std::string::npos) << message;
+    EXPECT_NE(message.find("ti\\x1b[2Jny"), std::string::npos) << message;
+    EXPECT_NE(message.find("control characters"), std::string::npos) << message;
+  }
+}
+
 TEST(Rig, MissingFileIsNamed) {
   try {
     load_rig("/nonexistent/rig.yaml");

@@ -94,8 +94,8 @@ TEST(BadInput, EvalWithMissingPrediction) {
 
 TEST(BadInput, BadSolverOptionNamesTheFlag) {
   const auto stack = make_stack(testing::scratch_dir());
-  const auto run =
-      run_lightstage({"solve", "--input", stack.string(), "--t-low", "1.5", "--out", (stack / "o").string()});
+  const auto run = run_lightstage(
+      {"solve", "--input", stack.string(), "--t-low", "1.5", "--out", (stack.parent_path() / "o").string()});
   expect_one_line_error(run, "t_low");
 }
 

@@ -9,6 +9,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <limits>
+
 namespace lightstage::firmware {
 namespace {
 
@@ -36,8 +38,9 @@ bool is_fault(const proto::ControllerMessage& message) { return message.has_faul
 // The direct rig (10 ms on-time, duty 0.5 over 100 ms) on a fake chip.
 template <typename ClockType>
 struct Bench {
-  Bench() : rig(testing::direct_rig()), chip(FakeChip::with_lines(16, clock)) {
-    controller = std::make_unique<Controller>(rig, open_dome_io(rig, *chip, clock), clock);
+  explicit Bench(ControllerOptions options = {})
+      : rig(testing::direct_rig()), chip(FakeChip::with_lines(16, clock)) {
+    controller = std::make_unique<Controller>(rig, open_dome_io(rig, *chip, clock), clock, options);
     controller->set_sink(log.sink());
   }
   ~Bench() { controller.reset(); }
@@ -132,6 +135,25 @@ TEST(Controller, RunsASequenceAndReportsEveryStepThenDone) {
   EXPECT_EQ(bench.controller->status().state(), proto::Status::IDLE);
 }
 
+TEST(Controller, RefusesAStartFarAheadOfItsClock) {
+  Bench<VirtualClock> bench;
+  ASSERT_FALSE(bench.controller->upload(testing::one_led_per_step(8, {0, 1}, {})));
+  for (const std::int64_t start_ns :
+       {std::numeric_limits<std::int64_t>::max(), bench.clock.now_ns() + Sequencer::kMaxStartAheadNs + 1}) {
+    const auto refusal = bench.controller->run(8, start_ns);
+    ASSERT_TRUE(refusal) << start_ns;
+    EXPECT_EQ(refusal->code, proto::Error::BAD_REQUEST);
+    EXPECT_THAT(refusal->message, HasSubstr("ahead of the controller's clock"));
+  }
+  EXPECT_FALSE(bench.controller->active());
+  bool accepted = false;
+  ASSERT_FALSE(bench.controller->run(8, bench.clock.now_ns() + 1'000'000, [&] { accepted = true; }));
+  EXPECT_TRUE(accepted);
+  const auto done = bench.log.wait_for([](const auto& m) { return m.has_sequence_done(); });
+  ASSERT_TRUE(done);
+  EXPECT_EQ(done->sequence_done().outcome(), proto::OK);
+}
+
 TEST(Controller, RefusesUnknownSequencesAndStaticLedsWhileRunning) {
   Bench<ManualClock> bench;
   const auto missing = bench.controller->run(77, 0);
@@ -171,6 +193,80 @@ TEST(Controller, RefusesUnknownLedsAndDimming) {
   const auto dimmed = bench.controller->set_leds(dim);
   ASSERT_TRUE(dimmed);
   EXPECT_THAT(dimmed->message, HasSubstr("cannot dim"));
+}
+
+// A wake-up that comes late (a loaded machine) must not carry a static LED
+// past its limit: the cut-off is planned a margin ahead. On the virtual clock
+// every sleep wakes 1.5 ms late; the order of the chip's line changes shows
+// the LED off before its 10 ms were up.
+TEST(Controller, StaticCutOffPlannedAheadSoALateWakeUpStaysWithinTheLimit) {
+  Bench<VirtualClock> bench(ControllerOptions{.cutoff_margin_us = 2000});
+  bench.clock.set_oversleep(1'500'000);
+  ASSERT_FALSE(bench.controller->set_leds(leds({1})));
+  ASSERT_TRUE(bench.log.wait_for(is_fault)) << "the LED was never switched off";
+  const auto changes = bench.chip->changes_of(1);
+  ASSERT_EQ(changes.size(), 2u);
+  EXPECT_EQ(changes[0].value, 1);
+  EXPECT_EQ(changes[1].value, 0);
+  EXPECT_LE(changes[1].t_ns - changes[0].t_ns, 10 * kMs) << "the cut-off overshot max_on_us";
+  EXPECT_GE(changes[1].t_ns - changes[0].t_ns, 8 * kMs) << "switched off sooner than the margin asks";
+}
+
+// The margin never eats more than half of a short budget.
+TEST(Controller, CutOffMarginIsAtMostHalfTheBudget) {
+  Bench<VirtualClock> bench(ControllerOptions{.cutoff_margin_us = 50'000});
+  ASSERT_FALSE(bench.controller->set_leds(leds({2})));
+  ASSERT_TRUE(bench.log.wait_for(is_fault));
+  EXPECT_EQ(bench.on_time_ns(2), 5 * kMs);
+}
+
+// What hosts may make the controller keep is bounded by size, and goes with
+// the session that uploaded it.
+TEST(Controller, StoredSequencesAreBoundedByTotalSizeAndForgotten) {
+  const proto::Sequence one = testing::one_led_per_step(1, {0, 1, 2, 3}, {.leds = {}, .exposure_us = 100});
+  const std::size_t bytes = one.ByteSizeLong();
+  Bench<VirtualClock> bench(ControllerOptions{.max_sequence_bytes = 2 * bytes + bytes / 2});
+  ASSERT_FALSE(bench.controller->upload(one));
+  proto::Sequence two = one;
+  two.set_id(2);
+  ASSERT_FALSE(bench.controller->upload(two));
+  proto::Sequence three = one;
+  three.set_id(3);
+  const auto refused = bench.controller->upload(three);
+  ASSERT_TRUE(refused);
+  EXPECT_EQ(refused->code, proto::Error::BAD_REQUEST);
+  EXPECT_THAT(refused->message, HasSubstr("byte limit"));
+  // Replacing a stored sequence counts its new size only.
+  EXPECT_FALSE(bench.controller->upload(two));
+  bench.controller->forget_sequences();
+  const auto gone = bench.controller->run(1, 0);
+  ASSERT_TRUE(gone);
+  EXPECT_EQ(gone->code, proto::Error::NO_SUCH_SEQUENCE);
+  EXPECT_FALSE(bench.controller->upload(three)) << "forgetting frees the space";
+}
+
+// A GPIO backend that failed cannot be trusted again: the fault stays in
+// Status, and every command is refused, so that the daemon can exit and
+// systemd restart it.
+TEST(Controller, AFailedGpioBackendStaysAFaultAndRefusesCommands) {
+  Bench<ManualClock> bench;
+  EXPECT_FALSE(bench.controller->gpio_failure());
+  bench.chip->fail_after_sets(0);
+  const auto failed = bench.controller->set_leds(leds({1}));
+  ASSERT_TRUE(failed);
+  EXPECT_EQ(failed->code, proto::Error::GPIO_ERROR);
+  ASSERT_TRUE(bench.controller->gpio_failure());
+  EXPECT_EQ(bench.controller->status().state(), proto::Status::FAULT);
+  EXPECT_THAT(bench.controller->status().last_fault(), HasSubstr("GPIO backend lost"));
+  bench.controller->clear_fault();
+  EXPECT_EQ(bench.controller->status().state(), proto::Status::FAULT) << "a new command hid the failure";
+  for (const auto& refusal :
+       {bench.controller->set_leds(leds({})), bench.controller->upload(testing::one_led_per_step(4, {0}, {})),
+        bench.controller->run(4, 0)}) {
+    ASSERT_TRUE(refusal);
+    EXPECT_EQ(refusal->code, proto::Error::GPIO_ERROR);
+    EXPECT_THAT(refusal->message, HasSubstr("shutting down"));
+  }
 }
 
 }  // namespace

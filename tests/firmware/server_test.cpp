@@ -64,11 +64,12 @@ bool is_done(const proto::ControllerMessage& message) { return message.has_seque
 // A controller for the direct rig (2 s on-time) on a fake chip with a camera,
 // real time, served to one in-process host over a socket pair.
 struct ServerBench {
-  explicit ServerBench(testing::FakeCamera camera = {8, 9, 50 * kUs, 2000 * kUs, false})
+  explicit ServerBench(testing::FakeCamera camera = {8, 9, 50 * kUs, 2000 * kUs, false},
+                       ServerOptions options = {.gpio_uri = "fake:chip"})
       : rig(testing::direct_rig(2'000'000, 0.5, 10'000'000)), chip(FakeChip::with_lines(16, clock)) {
     chip->set_camera(camera);
     controller = std::make_unique<Controller>(rig, open_dome_io(rig, *chip, clock), clock);
-    server = std::make_unique<ControllerServer>(*controller, ServerOptions{.gpio_uri = "fake:chip"});
+    server = std::make_unique<ControllerServer>(*controller, options);
     auto [host_end, controller_end] = socket_link_pair();
     thread = std::thread(
         [this, link = std::move(controller_end)]() mutable { server->serve_client(std::move(link), stop); });
@@ -325,6 +326,190 @@ TEST(ControllerServer, RefusesASecondHostWithBusy) {
   stop = true;  // like SIGTERM
   serving.join();
   EXPECT_EQ(chip->value(2), 0);
+}
+
+constexpr testing::FakeCamera kCamera{8, 9, 50 * kUs, 2000 * kUs, false};
+
+bool is_error(const proto::ControllerMessage& message, proto::Error::Code code) {
+  return message.has_error() && message.error().code() == code;
+}
+
+// Reads until the server hangs up; the Error{code} must come before that.
+void expect_hang_up_with(TestHost& host, proto::Error::Code code, std::chrono::milliseconds within) {
+  bool told = false;
+  const auto deadline = std::chrono::steady_clock::now() + within;
+  try {
+    while (std::chrono::steady_clock::now() < deadline) {
+      proto::ControllerMessage message;
+      if (host.channel().receive(message, 20ms)) told = told || is_error(message, code);
+    }
+    ADD_FAILURE() << "still connected after " << within.count() << " ms";
+  } catch (const LinkClosed&) {
+  }
+  EXPECT_TRUE(told) << "hung up without saying " << proto::Error::Code_Name(code);
+}
+
+TEST(ControllerServer, HangsUpOnAConnectionThatNeverSaysHello) {
+  ServerBench bench(kCamera, {.gpio_uri = "fake:chip", .hello_timeout = 200ms});
+  const auto start = std::chrono::steady_clock::now();
+  const std::uint8_t half_a_header[] = {'L', 'S', 0x10};
+  bench.host->send_raw(half_a_header);
+  expect_hang_up_with(*bench.host, proto::Error::SESSION_EXPIRED, 5s);
+  EXPECT_GE(std::chrono::steady_clock::now() - start, 200ms);
+  bench.thread.join();  // serve_client returned: the lock is free
+}
+
+// A link on which nothing arrives and for which nobody waits (a serial line
+// with no host on it) is not hung up on: the first host to talk is served.
+TEST(ControllerServer, ASilentLinkThatKeepsNobodyOutStaysOpen) {
+  ServerBench bench(kCamera, {.gpio_uri = "fake:chip", .hello_timeout = 100ms});
+  std::this_thread::sleep_for(400ms);
+  EXPECT_TRUE(bench.host->hello().has_info());
+}
+
+// A peer trickling bytes that never make a frame proves nothing: after Hello
+// it loses its lease (and the dome goes dark), before Hello its hello timeout runs.
+TEST(ControllerServer, ASlowlorisHostLosesItsLeaseAndTheDomeGoesDark) {
+  ServerBench bench(kCamera, {.gpio_uri = "fake:chip", .hello_timeout = 60s, .idle_lease = 300ms});
+  ASSERT_TRUE(bench.host->hello(100).has_info());
+  ASSERT_TRUE(bench.host->request(set_leds({1})).has_ack());
+  std::atomic<bool> trickling{true};
+  std::thread trickle([&] {
+    const std::uint8_t header[] = {'L', 'S', 0x00, 0x10, 0x00, 0x00};
+    try {
+      for (std::size_t i = 0; trickling; ++i) {
+        bench.host->send_raw(std::span(header).subspan(i % sizeof(header), 1));
+        std::this_thread::sleep_for(10ms);
+      }
+    } catch (const LinkClosed&) {
+    }
+  });
+  expect_hang_up_with(*bench.host, proto::Error::SESSION_EXPIRED, 5s);
+  trickling = false;
+  trickle.join();
+  bench.thread.join();
+  EXPECT_TRUE(bench.dark());
+}
+
+// Only valid messages prove the host alive: garbage, however steady, lets
+// the watchdog fire.
+TEST(ControllerServer, GarbageDoesNotFeedTheWatchdog) {
+  ServerBench bench;
+  ASSERT_TRUE(bench.host->hello(200).has_info());
+  ASSERT_TRUE(bench.host->request(set_leds({0})).has_ack());
+  const std::string garbage = "xx";
+  const auto until = std::chrono::steady_clock::now() + 800ms;
+  while (std::chrono::steady_clock::now() < until) {
+    bench.host->send_raw(std::span(reinterpret_cast<const std::uint8_t*>(garbage.data()), garbage.size()));
+    std::this_thread::sleep_for(10ms);
+  }
+  const auto fault = bench.host->wait_for([](const auto& m) { return m.has_fault(); }, 2s);
+  ASSERT_TRUE(fault) << "garbage kept the watchdog fed";
+  EXPECT_EQ(fault->fault().outcome(), proto::WATCHDOG);
+  EXPECT_TRUE(bench.dark());
+}
+
+// Empty messages (valid frames, no request) arriving back to back neither
+// feed the watchdog nor keep it from being checked.
+TEST(ControllerServer, AFloodOfEmptyMessagesDoesNotFeedTheWatchdog) {
+  ServerBench bench;
+  ASSERT_TRUE(bench.host->hello(200).has_info());
+  ASSERT_TRUE(bench.host->request(set_leds({3})).has_ack());
+  std::atomic<bool> flooding{true};
+  std::thread flood([&] {
+    const proto::HostMessage empty;
+    const auto until = std::chrono::steady_clock::now() + 600ms;
+    while (std::chrono::steady_clock::now() < until) bench.host->send(empty);
+    flooding = false;
+  });
+  // Read every reply as it comes, so that neither side's buffer fills; then
+  // until the server has nothing more to say.
+  std::optional<proto::Fault> fault;
+  proto::ControllerMessage message;
+  const auto note = [&] {
+    if (message.has_fault() && !fault) fault = message.fault();
+  };
+  while (flooding) {
+    if (bench.host->channel().receive(message, 20ms)) note();
+  }
+  while (bench.host->channel().receive(message, 300ms)) note();
+  flood.join();
+  ASSERT_TRUE(fault) << "empty messages kept the watchdog fed";
+  EXPECT_EQ(fault->outcome(), proto::WATCHDOG);
+  EXPECT_TRUE(bench.dark());
+}
+
+TEST(ControllerServer, DropsTheSequencesOfAHostWhenItsSessionEnds) {
+  MonotonicClock clock;
+  const Rig rig = testing::direct_rig(2'000'000, 0.5, 10'000'000);
+  auto chip = FakeChip::with_lines(16, clock);
+  Controller controller(rig, open_dome_io(rig, *chip, clock), clock);
+  ControllerServer server(controller, {});
+  std::atomic<bool> stop{false};
+  const auto session = [&](const std::function<void(TestHost&)>& talk) {
+    auto [host_end, controller_end] = socket_link_pair();
+    std::thread serving(
+        [&, link = std::move(controller_end)]() mutable { server.serve_client(std::move(link), stop); });
+    {
+      TestHost host(std::move(host_end));
+      ASSERT_TRUE(host.hello().has_info());
+      talk(host);
+    }  // hangs up
+    serving.join();
+  };
+  session([](TestHost& host) {
+    ASSERT_TRUE(host.request(upload(testing::one_led_per_step(8, {1}, {}))).has_ack());
+  });
+  session(
+      [](TestHost& host) { EXPECT_EQ(error_code(host.request(run(8))), proto::Error::NO_SUCH_SEQUENCE); });
+}
+
+// After the GPIO backend fails the server stops serving (the daemon then
+// exits non-zero); the host hears why first.
+TEST(ControllerServer, StopsServingWhenTheGpioBackendFails) {
+  ServerBench bench;
+  ASSERT_TRUE(bench.host->hello().has_info());
+  bench.chip->fail_after_sets(0);
+  EXPECT_EQ(error_code(bench.host->request(set_leds({2}))), proto::Error::GPIO_ERROR);
+  bench.thread.join();  // returns without a stop request
+  EXPECT_THAT(bench.controller->status().last_fault(), HasSubstr("GPIO backend lost"));
+  EXPECT_EQ(bench.controller->status().state(), proto::Status::FAULT);
+  const auto fault = bench.host->wait_for([](const auto& m) { return m.has_fault(); }, 2s);
+  ASSERT_TRUE(fault);
+  EXPECT_EQ(fault->fault().outcome(), proto::GPIO_ERROR);
+}
+
+// BUSY says who holds the dome and since when; a holder that never says
+// Hello gives the lock up at its hello timeout.
+TEST(ControllerServer, BusyNamesTheHolderAndAnIdleHolderLosesTheLock) {
+  MonotonicClock clock;
+  const Rig rig = testing::direct_rig(2'000'000, 0.5, 10'000'000);
+  auto chip = FakeChip::with_lines(16, clock);
+  Controller controller(rig, open_dome_io(rig, *chip, clock), clock);
+  ControllerServer server(controller, {.gpio_uri = "", .hello_timeout = 500ms});
+  const std::string uri = "unix:" + (lightstage::testing::socket_dir() / "idle.sock").string();
+  auto listener = listen_socket_link(uri);
+  std::atomic<bool> stop{false};
+  std::thread serving([&] { server.serve(*listener, stop); });
+
+  MessageChannel idle(connect_socket_link(uri, 5s));  // connects, says nothing
+  std::this_thread::sleep_for(100ms);
+  {
+    MessageChannel second(connect_socket_link(uri, 5s));
+    proto::ControllerMessage refusal;
+    ASSERT_TRUE(second.receive(refusal, 10s));
+    EXPECT_EQ(error_code(refusal), proto::Error::BUSY);
+    EXPECT_THAT(refusal.error().message(), HasSubstr("connected since 20"));
+    EXPECT_THAT(refusal.error().message(), HasSubstr("ms ago"));
+    EXPECT_THAT(refusal.error().message(), HasSubstr("no Hello yet"));
+    EXPECT_THAT(refusal.error().message(), HasSubstr("unix:"));
+  }
+  // After the idle holder's hello timeout, the next host gets the dome.
+  std::this_thread::sleep_for(600ms);
+  TestHost next(connect_socket_link(uri, 5s));
+  EXPECT_TRUE(next.hello().has_info());
+  stop = true;
+  serving.join();
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 // Every frame is parsed as each message type that travels on our links, and
 // what parses must survive serialize -> parse unchanged; every payload must
 // survive encode_frame -> FrameDecoder unchanged.
+#include "chunked_link.hpp"
 #include "lightstage/common/framing.hpp"
 #include "lightstage/common/message_channel.hpp"
 #include "lightstage/proto/controller.pb.h"
@@ -52,27 +53,6 @@ void check_payload(const Bytes& payload) {
   require(!decoder.next() && decoder.buffered() == 0);
 }
 
-// Hands out the fuzz input in chunks whose sizes the input itself chooses.
-class ChunkedLink final : public lightstage::ByteLink {
- public:
-  explicit ChunkedLink(std::deque<Bytes> chunks) : chunks_(std::move(chunks)) {}
-  std::size_t read(std::span<std::uint8_t> buffer, std::chrono::milliseconds) override {
-    if (chunks_.empty()) throw lightstage::LinkClosed("fuzz: end of input");
-    Bytes& chunk = chunks_.front();
-    const std::size_t n = std::min(buffer.size(), chunk.size());
-    std::copy_n(chunk.begin(), n, buffer.begin());
-    chunk.erase(chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(n));
-    if (chunk.empty()) chunks_.pop_front();
-    return n;
-  }
-  void write(std::span<const std::uint8_t>) override {}
-  void shutdown() override { chunks_.clear(); }
-  std::string describe() const override { return "fuzz"; }
-
- private:
-  std::deque<Bytes> chunks_;
-};
-
 }  // namespace
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
@@ -117,7 +97,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   require(reports <= frames + (stream.size() + chunk_size - 1) / chunk_size);
 
   // The channel over the same chunks: messages or ProtocolErrors, then LinkClosed.
-  lightstage::MessageChannel channel(std::make_unique<ChunkedLink>(std::move(chunks)));
+  lightstage::MessageChannel channel(std::make_unique<lightstage::fuzz::ChunkedLink>(std::move(chunks)));
   std::size_t received = 0;
   for (;;) {
     try {

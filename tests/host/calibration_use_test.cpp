@@ -155,6 +155,55 @@ TEST(CalibrationNearLights, NearLightLambertianLowersTheNormalError) {
   EXPECT_LT(near, 0.8 * distant);
 }
 
+// Uneven LEDs whose stack already records each one's brightness (the sim
+// writes it into light_intensity): intensities calibrated from a matte sphere
+// must replace the stack's, not multiply them (which counts the brightness
+// twice), so the normals come out as with the true intensities.
+TEST(CalibrationApply, CalibratedIntensitiesReplaceTheStacks) {
+  const Rig rig = uneven_rig();
+  const fs::path dir = testing::scratch_dir();
+  write_sim_stack(rig, "chrome-probe", dir / "chrome", 256);
+  write_sim_stack(rig, "matte-sphere", dir / "matte", 256);
+  write_sim_stack(rig, "bunny", dir / "object", 256);
+  LightCalibrationOptions o;
+  o.inputs = {dir / "chrome"};
+  o.rig = default_rig_path();
+  o.intensity_input = dir / "matte";
+  o.intensity_target = IntensityTarget::kMatteSphere;
+  const auto run = calibrate_lights(o);
+  write_calibration_outputs(dir / "cal", run, o.inputs);
+
+  L2Options l2;
+  l2.shadow_threshold = 0.02;
+  auto solve = [&](bool true_intensities) {
+    ImageStack stack = io::load_stack(dir / "object");
+    std::vector<Vec3> truth;
+    for (const Frame& frame : stack.frames) truth.push_back(frame.light_intensity);
+    const StackCalibration applied =
+        apply_calibration_file(dir / "cal" / "calibration.json", dir / "object", stack);
+    EXPECT_TRUE(applied.intensities_replaced);
+    if (true_intensities) {
+      for (std::size_t f = 0; f < stack.frames.size(); ++f) stack.frames[f].light_intensity = truth[f];
+    } else {
+      // Calibrated relative intensities at the stack's own scale.
+      double worst = 0;
+      for (std::size_t f = 0; f < stack.frames.size(); ++f)
+        worst = std::max(worst, std::abs(stack.frames[f].light_intensity.x() / truth[f].x() - 1));
+      EXPECT_LT(worst, 0.02);
+    }
+    Observations observations = make_observations(stack);
+    EXPECT_TRUE(set_near_lights(applied, observations));
+    return angular_error(solve_lambertian(observations, l2).normals, stack.ground_truth->normals,
+                         observations.mask)
+        .stats.mean;
+  };
+  const double with_truth = solve(true), calibrated = solve(false);
+  RecordProperty("true_intensities_mean_deg", fmt::format("{:.3f}", with_truth));
+  RecordProperty("calibrated_intensities_mean_deg", fmt::format("{:.3f}", calibrated));
+  std::printf("uneven LEDs: true intensities %.3f deg, calibrated %.3f deg\n", with_truth, calibrated);
+  EXPECT_LT(calibrated, 1.1 * with_truth);
+}
+
 TEST(CalibrationApply, LpFileAndMismatchedStacks) {
   const Rig rig = load_rig(default_rig_path());
   const fs::path dir = testing::scratch_dir();

@@ -143,5 +143,37 @@ TEST(CapturePlan, AutomaticExposureAimsThePreviewAtTheTargetAndRetriesClippedOne
   EXPECT_DOUBLE_EQ(exposure.at(6), std::max(10.0, 8000 / std::pow(8, 6)));
 }
 
+TEST(CapturePlan, AStrobeTimeoutFitsTheLedsOnTimeLimit) {
+  // Room for a late camera when the limit allows...
+  EXPECT_EQ(strobe_timeout_us(10'000, 2'000'000, 500), 210'000u);
+  // ...but never more than the limit leaves after the settle time (the controller counts all of it).
+  EXPECT_EQ(strobe_timeout_us(1'800'000, 2'000'000, 500), 1'999'500u);
+  EXPECT_GE(strobe_timeout_us(1'800'000, 2'000'000, 500), open_loop_on_us(1'800'000));
+  // Darks light nothing: no limit.
+  EXPECT_EQ(strobe_timeout_us(1'800'000, 0, 500), 2'000'000u);
+}
+
+TEST(CapturePlan, AnExposureTooLongForAnLedIsRefusedBeforeAnythingIsTaken) {
+  const Rig rig = three_led_rig();
+  const OnTimeLimits limits = {{4, 2'000'000}, {5, 2'000'000}, {6, 100'000}};
+  const CapturePlan fits = make_plan({4, 5}, {{4, 1'900'000}, {5, 1000}}, {}, {}, 2);
+  EXPECT_NO_THROW(check_on_time(fits, limits, 500));
+  // The longest exposure the planner allows an LED fits its limit exactly.
+  const camera::ControlInfo range;
+  const double longest = longest_exposure_us(rig.led(4), range, 500);
+  EXPECT_NO_THROW(check_on_time(make_plan({4}, {{4, longest}}, {}, {}, 0), limits, 500));
+
+  const std::string message = error_of([&] {
+    check_on_time(make_plan({4, 6}, {{4, 1000}, {6, 200'000}}, {}, {}, 2), limits, 500);
+  });
+  EXPECT_NE(message.find("LED 6 at 200000 us"), std::string::npos) << message;
+  EXPECT_NE(message.find("max_on_us 100000"), std::string::npos) << message;
+  // A bracket's longest exposure counts.
+  EXPECT_NE(error_of([&] {
+              check_on_time(make_plan({6}, {{6, 50'000}}, {{6, {50'000, 200'000}}}, {0, 2}, 0), limits, 500);
+            }).find("LED 6 at 200000 us"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace lightstage

@@ -1,135 +1,19 @@
 // The capture runner against a scripted controller and camera in this process
-// (software trigger: the controller lights the LED, the camera is triggered).
+// (capture_fakes.hpp).
 #include "lightstage/host/capture/capture_runner.hpp"
 
-#include "lightstage/common/message_channel.hpp"
-#include "lightstage/common/socket_link.hpp"
+#include "capture_fakes.hpp"
 #include "lightstage/testing/errors.hpp"
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
-#include <atomic>
-#include <deque>
-#include <mutex>
-#include <thread>
+#include <map>
 
 namespace lightstage {
 namespace {
 
-using std::chrono::milliseconds;
-
-// What the fake controller lit, for the fake camera to render.
-struct Dome {
-  std::atomic<int> lit{-1};  // -1: dark
-};
-
-// Answers Hello with Info (no strobe input, `max_steps` per sequence) and SetLeds with Ack.
-class FakeController {
- public:
-  FakeController(std::unique_ptr<ByteLink> link, Dome& dome, std::uint32_t max_steps)
-      : channel_(std::move(link)) {
-    thread_ = std::thread([this, &dome, max_steps] {
-      try {
-        for (;;) {
-          proto::HostMessage m;
-          if (!channel_.receive(m, milliseconds(20))) {
-            if (stop_) return;
-            continue;
-          }
-          if (m.has_heartbeat()) continue;
-          proto::ControllerMessage reply;
-          reply.set_request_id(m.request_id());
-          if (m.has_hello()) {
-            proto::Info* info = reply.mutable_info();
-            info->set_protocol_version(1);
-            info->set_rig_name("runner-test");
-            info->mutable_capabilities()->set_max_sequence_steps(max_steps);
-          } else if (m.has_set_leds()) {
-            dome.lit = m.set_leds().leds().empty() ? -1 : static_cast<int>(m.set_leds().leds(0).led_id());
-            reply.mutable_ack();
-          } else {
-            reply.mutable_error()->set_message("not scripted");
-          }
-          channel_.send(reply);
-        }
-      } catch (const LinkClosed&) {
-      }
-    });
-  }
-  ~FakeController() {
-    stop_ = true;
-    thread_.join();
-  }
-
- private:
-  MessageChannel channel_;
-  std::atomic<bool> stop_{false};
-  std::thread thread_;
-};
-
-// A software-triggered camera whose frames are filled with the lit LED's id
-// (0 when dark); the triggers listed in `drop` give no frame.
-class FakeCamera final : public camera::Camera {
- public:
-  explicit FakeCamera(Dome& dome) : Camera("fake:cam"), dome_(dome) {}
-  camera::CameraInfo info() const override { return {uri(), "fake", "test"}; }
-  std::vector<camera::FormatInfo> formats() const override { return {}; }
-  std::vector<camera::TriggerMode> trigger_modes() const override { return {camera::TriggerMode::kSoftware}; }
-  camera::CameraConfig default_config() const override { return {}; }
-  camera::Validation validate(camera::CameraConfig&) const override { return {}; }
-  void configure(const camera::CameraConfig& config) override { trigger_mode = config.trigger; }
-  camera::CameraConfig configuration() const override { return {}; }
-  camera::ControlInfo control_info() const override { return {}; }
-  camera::Controls set_controls(const camera::Controls& c) override {
-    if (c.exposure_us) exposure_us = *c.exposure_us;
-    return {exposure_us, c.analogue_gain.value_or(1.5)};
-  }
-  void start() override { streaming_ = true; }
-  void stop() override { streaming_ = false; }
-  bool streaming() const override { return streaming_; }
-  void trigger() override {
-    const int n = triggers++;
-    shots.emplace_back(dome_.lit.load(), exposure_us);
-    if (drop_all || std::ranges::count(drop, n) > 0) return;
-    camera::Frame frame;
-    frame.bit_depth = 12;
-    frame.sequence = static_cast<std::uint64_t>(n);
-    frame.exposure_us = exposure_us;
-    frame.image = cv::Mat(2, 3, CV_16UC1, cv::Scalar(std::max(dome_.lit.load(), 0)));
-    ready_.push_back(std::move(frame));
-  }
-  std::optional<camera::Frame> wait_frame(milliseconds) override {
-    if (ready_.empty()) return std::nullopt;
-    camera::Frame frame = std::move(ready_.front());
-    ready_.pop_front();
-    return frame;
-  }
-
-  camera::TriggerMode trigger_mode = camera::TriggerMode::kFreeRun;
-  double exposure_us = 0;
-  int triggers = 0;
-  std::vector<int> drop;
-  bool drop_all = false;
-  std::vector<std::pair<int, double>> shots;  // (lit LED, exposure) at each trigger
-
- private:
-  Dome& dome_;
-  bool streaming_ = false;
-  std::deque<camera::Frame> ready_;
-};
-
-struct Bench {
-  explicit Bench(std::uint32_t max_steps = 12) {
-    auto [host_end, controller_end] = socket_link_pair();
-    controller = std::make_unique<FakeController>(std::move(controller_end), dome, max_steps);
-    client = std::make_unique<ControllerClient>(std::move(host_end));
-  }
-  Dome dome;
-  std::unique_ptr<FakeController> controller;
-  std::unique_ptr<ControllerClient> client;
-  FakeCamera cam{dome};
-};
+using testing::Bench;
+using testing::Dome;
 
 int value_of(const Taken& taken) { return taken.frame.image.at<std::uint16_t>(0, 0); }
 
@@ -224,6 +108,82 @@ TEST(CaptureRunner, BracketsAreTakenGroupByGroupEachAtItsExposuresShortestFirst)
   EXPECT_EQ(handed, (std::vector<std::size_t>{0, 1, 2}));
   EXPECT_EQ(bench.cam.shots, (std::vector<std::pair<int, double>>{
                                  {4, 125}, {5, 125}, {4, 1000}, {5, 1000}, {6, 250}, {6, 1000}}));
+}
+
+TEST(CaptureRunner, FramesExposedBeforeAWatchdogAbortAreHandedOnThenTheAbortIsThrown) {
+  Bench bench;
+  bench.cam.hardware = true;
+  bench.dome.watchdog_sequence = 0;
+  bench.dome.watchdog_after = 6;  // 6 of the 12 steps exposed
+  CaptureOptions options;
+  CaptureRunner runner(*bench.client, bench.cam, options);
+  ASSERT_TRUE(runner.hardware_trigger());
+  runner.start();
+  std::vector<int> ids;
+  std::map<int, double> exposure;
+  for (int id = 1; id <= 12; ++id) {
+    ids.push_back(id);
+    exposure[id] = 1000;
+  }
+  const CapturePlan plan = make_plan(ids, exposure, {}, {}, 0);
+  std::vector<std::pair<std::size_t, int>> handed;  // (frame, LED lit in its image)
+  std::string message;
+  try {
+    runner.take_frames(plan, {}, [&](std::size_t frame, std::vector<Take>& takes) {
+      ASSERT_EQ(takes.size(), 1u);
+      handed.emplace_back(frame, value_of(takes[0].taken));
+    });
+    ADD_FAILURE() << "the abort went unnoticed";
+  } catch (const BatchAborted& e) {
+    message = e.what();
+  }
+  EXPECT_NE(message.find("WATCHDOG after 6 of 12 steps"), std::string::npos) << message;
+  EXPECT_EQ(handed,
+            (std::vector<std::pair<std::size_t, int>>{{0, 1}, {1, 2}, {2, 3}, {3, 4}, {4, 5}, {5, 6}}));
+}
+
+TEST(CaptureRunner, AnAbortedBracketKeepsTheLedsWhoseBracketIsComplete) {
+  Bench bench;
+  bench.cam.hardware = true;
+  bench.dome.watchdog_sequence = 1;  // the second exposure's batch (LED 4 at 1000 us) is cut at once
+  bench.dome.watchdog_after = 0;
+  CaptureOptions options;
+  CaptureRunner runner(*bench.client, bench.cam, options);
+  runner.start();
+  // LED 5's bracket ends at 125 us (taken in full); LED 4's needs 1000 us as well.
+  const CapturePlan plan =
+      make_plan({4, 5}, {{4, 1000}, {5, 1000}}, {{4, {125, 1000}}, {5, {125}}}, {-3, 0}, 0);
+  std::vector<std::size_t> handed;
+  EXPECT_THROW(runner.take_frames(plan, {},
+                                  [&](std::size_t frame, std::vector<Take>& takes) {
+                                    handed.push_back(frame);
+                                    EXPECT_EQ(takes.size(), plan.frames[frame].bracket.size());
+                                  }),
+               BatchAborted);
+  EXPECT_EQ(handed, (std::vector<std::size_t>{1}));
+}
+
+TEST(CaptureRunner, AClosedLoopStepWaitsForTheStrobeNoLongerThanItsLedMayBeLit) {
+  proto::Led led;
+  led.set_id(4);
+  led.set_max_on_us(100'000);
+  Bench bench(12, {led}, /*strobe=*/true);
+  bench.cam.hardware = true;
+  CaptureOptions options;
+  CaptureRunner runner(*bench.client, bench.cam, options);
+  ASSERT_TRUE(runner.closed_loop());
+  runner.start();
+  const Batch batch = runner.run_batch({{4, 90'000}, {-1, 90'000}});
+  EXPECT_EQ(batch.taken.size(), 2u);
+  const std::lock_guard lock(bench.dome.mutex);
+  ASSERT_EQ(bench.dome.uploaded.size(), 1u);
+  const proto::Step& lit = bench.dome.uploaded[0].steps(0);
+  ASSERT_TRUE(lit.wait_strobe());
+  // The controller counts settle plus the whole timeout against the limit.
+  EXPECT_LE(lit.settle_us() + lit.strobe_timeout_us(), 100'000u);
+  EXPECT_GE(lit.strobe_timeout_us(), lit.exposure_us());
+  // A dark step lights nothing: it may wait longer for a late camera.
+  EXPECT_GT(bench.dome.uploaded[0].steps(1).strobe_timeout_us(), lit.strobe_timeout_us());
 }
 
 }  // namespace

@@ -3,11 +3,13 @@
 #include "lightstage/host/capture/stack_writer.hpp"
 
 #include "lightstage/host/io/stack_io.hpp"
+#include "lightstage/host/io/write_fault.hpp"
 #include "lightstage/testing/errors.hpp"
 #include "lightstage/testing/paths.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cerrno>
 #include <fstream>
 
 namespace lightstage {
@@ -51,7 +53,15 @@ nlohmann::json read_json(const fs::path& path) {
 
 void write_json(const fs::path& path, const nlohmann::json& json) { std::ofstream(path) << json.dump(2); }
 
-const CaptureSetup kSetup{2, false, true, {"fake:cam", "fake", "test"}, "fw 1", "writer-test"};
+const CaptureSetup kSetup{2, false, true, {"fake:cam", "fake", "test"}, "fw 1", "writer-test", std::nullopt};
+
+// What a --resume run asks for: automatic exposure, `stops`, `dark_frames` per dark.
+CaptureOptions asked(std::vector<double> stops = {}, int dark_frames = 2) {
+  CaptureOptions options;
+  options.bracket_stops = std::move(stops);
+  options.dark_frames = dark_frames;
+  return options;
+}
 
 // LEDs 4 and 6 at 2000 us, 5 at 500 us; darks of 2 frames.
 CapturePlan single_plan() { return make_plan({4, 5, 6}, {{4, 2000}, {5, 500}, {6, 2000}}, {}, {}, 2); }
@@ -117,6 +127,53 @@ void write_one_frame_stack(const Rig& rig, const fs::path& dir) {
   writer.write_index(false);
 }
 
+// The disk fills up while the index is rewritten (the manifest is the largest
+// file, so it fails first): the folder keeps its previous, agreeing index.
+TEST(CaptureStackWriter, AFullDiskLeavesTheLastIndexWholeAndSaysSo) {
+  const Rig rig = three_led_rig();
+  const fs::path dir = testing::scratch_dir();
+  write_one_frame_stack(rig, dir);
+  CaptureStackWriter writer(rig, dir, nullptr);
+  writer.resume({4, 5, 6}, asked());
+  writer.set_plan(single_plan(), kSetup);
+  writer.add_frame(0, take(1, 2000, 900));
+  std::string message;
+  {
+    const io::ScopedWriteFault full(
+        [](const fs::path& target) { return target.filename() == "manifest.json" ? ENOSPC : 0; });
+    try {
+      writer.write_index(false);
+      ADD_FAILURE() << "a full disk went unnoticed";
+    } catch (const InputError& e) {
+      ADD_FAILURE() << "a full disk is not bad input: " << e.what();
+    } catch (const Error& e) {
+      message = e.what();
+    }
+  }
+  EXPECT_NE(message.find("manifest.json"), std::string::npos) << message;
+  EXPECT_NE(message.find("no space left"), std::string::npos) << message;
+  EXPECT_NE(message.find("ENOSPC"), std::string::npos) << message;
+  io::LoadOptions load;
+  load.min_images = 1;
+  const ImageStack stack = io::load_stack(dir, load);  // loads: names, lights and manifest agree
+  ASSERT_EQ(stack.frames.size(), 1u);
+  EXPECT_EQ(stack.frames[0].filename, "002.png");
+  for (const auto& entry : fs::directory_iterator(dir))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+
+  // A frame image that does not fit fails the same way, before the index names it.
+  const io::ScopedWriteFault full(
+      [](const fs::path& target) { return target.extension() == ".png" ? ENOSPC : 0; });
+  try {
+    writer.add_frame(2, take(1, 2000, 700));
+    ADD_FAILURE() << "a full disk went unnoticed";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("003.png: cannot write: no space left"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(writer.done(), (std::vector<bool>{true, true, false}));  // frame 3 is not counted as taken
+}
+
 TEST(CaptureStackWriter, ResumeKeepsTheFramesDarksAndExposuresOfTheManifest) {
   const Rig rig = three_led_rig();
   const fs::path dir = testing::scratch_dir();
@@ -124,7 +181,7 @@ TEST(CaptureStackWriter, ResumeKeepsTheFramesDarksAndExposuresOfTheManifest) {
   nlohmann::json before = read_json(dir / "manifest.json");
 
   CaptureStackWriter writer(rig, dir, nullptr);
-  const PreviousPlan previous = writer.resume({4, 5, 6}, {});
+  const PreviousPlan previous = writer.resume({4, 5, 6}, asked());
   EXPECT_EQ(previous.exposure_us, (std::map<int, double>{{4, 2000}, {5, 500}, {6, 2000}}));
   EXPECT_TRUE(previous.bracket_exposure_us.empty());
   EXPECT_EQ(writer.frame_count(), 1u);
@@ -158,16 +215,76 @@ TEST(CaptureStackWriter, ResumeRefusesAnotherPlan) {
   }
   CaptureStackWriter writer(rig, dir, nullptr);
   EXPECT_NE(error_of([&] {
-              writer.resume({4, 5}, {});
+              writer.resume({4, 5}, asked());
             }).find("planned for other LEDs (3 of them) than this run (2)"),
             std::string::npos);
   EXPECT_NE(error_of([&] {
-              writer.resume({4, 5, 6}, {0, -3});
+              writer.resume({4, 5, 6}, asked({0, -3}));
             }).find("planned with bracket stops [], this run asks for [0,-3]"),
             std::string::npos);
   // No manifest: nothing to resume.
   CaptureStackWriter fresh(rig, dir / "elsewhere", nullptr);
-  EXPECT_TRUE(fresh.resume({4, 5, 6}, {}).exposure_us.empty());
+  EXPECT_TRUE(fresh.resume({4, 5, 6}, asked()).exposure_us.empty());
+}
+
+TEST(CaptureStackWriter, ResumeRefusesAnotherExposureOrDarkCount) {
+  const Rig rig = three_led_rig();
+  const fs::path dir = testing::scratch_dir();
+  const auto plan_in = [&](const fs::path& folder, const CapturePlan& plan, const CaptureSetup& setup) {
+    fs::create_directories(folder);
+    CaptureStackWriter writer(rig, folder, nullptr);
+    writer.set_plan(plan, setup);
+    writer.write_index(false);
+  };
+  plan_in(dir / "auto", single_plan(), kSetup);  // automatic exposure, 2 dark frames
+  CaptureSetup fixed = kSetup;
+  fixed.fixed_exposure_us = 1000;
+  plan_in(dir / "fixed", make_plan({4, 5, 6}, {{4, 1000}, {5, 1000}, {6, 1000}}, {}, {}, 2), fixed);
+  const auto refusal = [&](const fs::path& folder, const CaptureOptions& options) {
+    CaptureStackWriter writer(rig, folder, nullptr);
+    return error_of([&] { writer.resume({4, 5, 6}, options); });
+  };
+  CaptureOptions options = asked();
+  options.exposure_us = 1000;
+  EXPECT_NE(refusal(dir / "auto", options)
+                .find("planned with automatic exposure, this run asks for --exposure-us 1000"),
+            std::string::npos);
+  options.exposure_us = 2000;
+  EXPECT_NE(refusal(dir / "fixed", options)
+                .find("planned with --exposure-us 1000, this run asks for --exposure-us 2000"),
+            std::string::npos);
+  EXPECT_NE(refusal(dir / "fixed", asked())
+                .find("planned with --exposure-us 1000, this run asks for automatic exposure"),
+            std::string::npos);
+  EXPECT_NE(refusal(dir / "auto", asked({}, 4)).find("planned with --dark-frames 2, this run asks for 4"),
+            std::string::npos);
+  options.exposure_us = 1000;
+  EXPECT_EQ(refusal(dir / "fixed", options), "(no InputError)");
+  EXPECT_EQ(refusal(dir / "auto", asked()), "(no InputError)");
+
+  // A manifest from before the choice was recorded: the planned exposures themselves must fit.
+  nlohmann::json manifest = read_json(dir / "auto" / "manifest.json");
+  manifest["capture"].erase("fixed_exposure_us");
+  manifest["capture"].erase("dark_frames");
+  write_json(dir / "auto" / "manifest.json", manifest);
+  options.exposure_us = 2000;
+  EXPECT_NE(refusal(dir / "auto", options)
+                .find("LED 5 was planned at 500 us, this run asks for --exposure-us 2000"),
+            std::string::npos);
+}
+
+TEST(CaptureStackWriter, TheIndexIsOnDiskBeforeTheFirstFrame) {
+  const Rig rig = three_led_rig();
+  const fs::path dir = testing::scratch_dir();
+  CaptureStackWriter writer(rig, dir, nullptr);
+  writer.set_plan(single_plan(), kSetup);
+  writer.write_index(false);
+  // A stack with no frames yet: an empty index, not a folder without one.
+  for (const char* name : {"filenames.txt", "light_directions.txt", "light_intensities.txt"}) {
+    ASSERT_TRUE(fs::exists(dir / name)) << name;
+    EXPECT_EQ(fs::file_size(dir / name), 0u) << name;
+  }
+  EXPECT_EQ(read_json(dir / "manifest.json").at("capture").at("done"), nlohmann::json::array());
 }
 
 TEST(CaptureStackWriter, ResumeReadsNoFileOutsideTheStackFolder) {
@@ -180,7 +297,7 @@ TEST(CaptureStackWriter, ResumeReadsNoFileOutsideTheStackFolder) {
     edit(bad);
     write_json(dir / "manifest.json", bad);
     CaptureStackWriter writer(rig, dir, nullptr);
-    return error_of([&] { writer.resume({4, 5, 6}, {}); });
+    return error_of([&] { writer.resume({4, 5, 6}, asked()); });
   };
   EXPECT_NE(refused([](nlohmann::json& m) {
               m["frames"][0]["dark"] = "../dark_500us.png";
@@ -235,7 +352,7 @@ TEST(CaptureStackWriter, ABracketIsMergedIntoOneFloatFramePerExposureSecond) {
 
   // Resumed, the merged frame is kept.
   CaptureStackWriter again(rig, dir, nullptr);
-  const PreviousPlan previous = again.resume({4}, {-2, 0});
+  const PreviousPlan previous = again.resume({4}, asked({-2, 0}, 0));
   EXPECT_EQ(previous.bracket_exposure_us.at(4), (std::vector<double>{250, 1000}));
   EXPECT_EQ(again.frame_count(), 1u);
 }

@@ -1,6 +1,7 @@
 #include "lightstage/host/capture/response_curve.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/sim/sensor.hpp"
 #include "lightstage/testing/paths.hpp"
 
 #include <gtest/gtest.h>
@@ -96,6 +97,48 @@ TEST(ResponseCurve, BadFilesAndBracketsAreNamed) {
   EXPECT_THROW(InverseResponse::load(file), InputError);
   const std::vector<double> two = {1000, 2000};
   EXPECT_THROW(calibrate_response(bracket(two, 2.2, 16, nullptr), two, 16), InputError);
+}
+
+// A still scene through the simulator's camera (noise, quantisation, a gamma
+// 2.2 response) at each exposure: a bracket whose true response is known.
+std::vector<cv::Mat> simulated_bracket(const std::vector<double>& exposures_us,
+                                       const CameraDefaults& camera) {
+  cv::Mat shading(96, 96, CV_64FC1);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> log_s(std::log(0.003), std::log(1.2));
+  for (auto it = shading.begin<double>(); it != shading.end<double>(); ++it) *it = std::exp(log_s(rng));
+  std::vector<cv::Mat> images;
+  for (std::size_t i = 0; i < exposures_us.size(); ++i) {
+    sim::SensorOptions options;
+    options.exposure_us = exposures_us[i];
+    options.response = sim::ResponseCurve::parse("gamma:2.2");
+    images.push_back(sim::Sensor(options, camera).expose(shading, 5, i));
+  }
+  return images;
+}
+
+TEST(ResponseCurve, TheFitFollowsTheSimulatorsResponseToBothEnds) {
+  CameraDefaults camera;
+  const std::vector<double> exposures = response_bracket_us(camera.exposure_us);
+  ASSERT_EQ(exposures.size(), 8u);
+  const InverseResponse response = calibrate_response(simulated_bracket(exposures, camera), exposures, 16);
+  // Radiance at full scale is 1 for both; below, the fit must be the gamma curve.
+  for (const double v : {0.02, 0.04, 0.08, 0.15, 0.3, 0.5, 0.7, 0.85, 0.95, 0.98}) {
+    const double truth = std::pow(v, 2.2);
+    EXPECT_NEAR(response.at(v * 65535), truth, 0.06 * truth) << "at " << v << " of full scale";
+  }
+}
+
+TEST(ResponseCurve, TheDefaultLinearityBracketChecksAFittedCamera) {
+  CameraDefaults camera;
+  const std::vector<double> wide = response_bracket_us(camera.exposure_us);
+  const InverseResponse response = calibrate_response(simulated_bracket(wide, camera), wide, 16);
+  const std::vector<double> exposures = linearity_bracket_us(camera.exposure_us);
+  const auto images = simulated_bracket(exposures, camera);
+  EXPECT_GT(check_linearity(images, exposures, InverseResponse::identity(16)).max_deviation, 0.1);
+  const LinearityReport report = check_linearity(images, exposures, response);
+  EXPECT_GT(report.pixels_used, 500u);
+  EXPECT_LT(report.max_deviation, 0.02) << report.to_json().dump();
 }
 
 }  // namespace

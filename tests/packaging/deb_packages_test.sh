@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
-# deb_packages_test.sh CPACK BUILD_DIR SCRATCH VERSION
+# deb_packages_test.sh CPACK BUILD_DIR SCRATCH VERSION CMAKE LIBDIR CONSUMER_SOURCE
 # Builds the Debian packages of BUILD_DIR into SCRATCH, unpacks them with dpkg -x
 # into one root and checks the installed tree: the programs run from it (version,
 # rig check, a small demo), the man pages render, the unit points at the installed
-# daemon, bash completion works, no two packages ship the same file, and the host
-# package depends on the libraries its program links.
+# daemon, bash completion works, no two packages ship the same file, the host
+# package depends on the libraries its program links, and a program of someone
+# else's (CONSUMER_SOURCE) builds against liblightstage-dev with CMake's
+# find_package and with pkg-config, and runs.
 set -euo pipefail
-cpack=$1 build=$2 scratch=$3 version=$4
+cpack=$1 build=$2 scratch=$3 version=$4 cmake=$5 libdir=$6 consumer=$7
 
 fail() { echo "FAIL: $*" >&2; exit 1; }
 # grep that reads all its input: `grep -q` stops at the first match, and with
@@ -20,7 +22,7 @@ root=$scratch/root
   { cat "$scratch/cpack.log" >&2; fail "cpack -G DEB failed"; }
 
 declare -A deb
-for package in lightstage lightstage-domed lightstage-sim lightstage-rigs; do
+for package in lightstage lightstage-domed lightstage-sim lightstage-rigs liblightstage-dev; do
   files=("$scratch/debs/${package}_${version}-"*.deb)
   [ -f "${files[0]}" ] || fail "no package file for $package in $scratch/debs: $(ls "$scratch/debs")"
   deb[$package]=${files[0]}
@@ -50,10 +52,17 @@ expect_in lightstage-domed usr/bin/lightstage-domed
 expect_in lightstage-domed usr/share/man/man1/lightstage-domed.1.gz
 expect_in lightstage-domed usr/lib/systemd/system/lightstage-domed.service
 expect_in lightstage-domed usr/lib/sysusers.d/lightstage.conf
+expect_in lightstage-domed usr/lib/udev/rules.d/60-lightstage-gpio.rules
 expect_in lightstage-domed usr/libexec/lightstage/lightstage-gadget.sh
 expect_in lightstage-sim usr/bin/lightstage-sim
 expect_in lightstage-sim usr/share/man/man1/lightstage-sim.1.gz
 expect_in lightstage-rigs usr/share/lightstage/rigs/sim-dome.yaml
+expect_in liblightstage-dev usr/include/lightstage/pipeline/solve_methods.hpp
+expect_in liblightstage-dev usr/include/lightstage/common/version.hpp
+expect_in liblightstage-dev usr/include/lightstage/proto/controller.pb.h
+expect_in liblightstage-dev "usr/$libdir/liblightstage_host.a"
+expect_in liblightstage-dev "usr/$libdir/cmake/Lightstage/LightstageConfig.cmake"
+expect_in liblightstage-dev "usr/$libdir/pkgconfig/lightstage.pc"
 [ -x "$root/usr/libexec/lightstage/lightstage-gadget.sh" ] || fail "the gadget script is not executable"
 
 # Control fields: library dependencies from dpkg-shlibdeps, the rigs package, maintainer scripts.
@@ -119,4 +128,25 @@ complete_words() {
 complete_words "$root/usr/bin/lightstage" de | contains -x demo || fail "completion: 'lightstage de' offers no demo"
 complete_words "$root/usr/bin/lightstage" demo --wi | contains -x -- --width || fail "completion: 'lightstage demo --wi' offers no --width"
 complete_words "$root/usr/bin/lightstage" demo --method ro | contains -x robust || fail "completion: 'lightstage demo --method ro' offers no robust"
+# The library, from a program of someone else's: CMake's find_package (the
+# package is found under the unpacked root, the dependencies on this machine)...
+dev_depends=$(dpkg-deb --field "${deb[liblightstage-dev]}" Depends)
+for package in libeigen3-dev libopencv-core-dev libprotobuf-dev; do
+  grep -q "$package" <<<"$dev_depends" || fail "liblightstage-dev's Depends has no $package: $dev_depends"
+done
+readelf -S "$root/usr/$libdir/liblightstage_host.a" | contains debug_info && fail "liblightstage_host.a keeps its debug information"
+"$cmake" -S "$consumer" -B "$scratch/consumer-cmake" -DCMAKE_BUILD_TYPE=Release "-DCMAKE_PREFIX_PATH=$root/usr" \
+  >"$scratch/consumer-cmake.log" 2>&1 || fail "find_package(Lightstage) from the unpacked packages: $(tail -20 "$scratch/consumer-cmake.log")"
+"$cmake" --build "$scratch/consumer-cmake" >>"$scratch/consumer-cmake.log" 2>&1 ||
+  fail "building against Lightstage::pipeline: $(tail -20 "$scratch/consumer-cmake.log")"
+"$scratch/consumer-cmake/consumer" >"$scratch/consumer.out" || fail "the CMake consumer: $(cat "$scratch/consumer.out")"
+contains "lightstage $version" "$scratch/consumer.out" || fail "the CMake consumer: $(cat "$scratch/consumer.out")"
+# ... and pkg-config.
+pc_dir=$root/usr/$libdir/pkgconfig
+PKG_CONFIG_PATH=$pc_dir pkg-config --modversion lightstage | contains -x "$version" || fail "pkg-config --modversion lightstage"
+read -r -a flags <<<"$(PKG_CONFIG_PATH=$pc_dir pkg-config --cflags --libs lightstage)"
+c++ -std=c++20 -O1 -o "$scratch/consumer-pc" "$consumer/consumer.cpp" "${flags[@]}" 2>"$scratch/consumer-pc.log" ||
+  fail "c++ \$(pkg-config --cflags --libs lightstage): $(tail -20 "$scratch/consumer-pc.log")"
+"$scratch/consumer-pc" >"$scratch/consumer-pc.out" || fail "the pkg-config consumer: $(cat "$scratch/consumer-pc.out")"
+cat "$scratch/consumer.out"
 echo "packages: ${deb[*]}"

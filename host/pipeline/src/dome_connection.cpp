@@ -1,10 +1,28 @@
 #include "lightstage/pipeline/dome_connection.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/printable.hpp"
+#include "lightstage/common/rig_fingerprint.hpp"
 #include "lightstage/hw/cameras.hpp"
 #include "lightstage/sim/camera/sim_camera.hpp"
 
 namespace lightstage::pipeline {
+
+void check_same_rig(const Rig& rig, const std::filesystem::path& rig_path, const proto::Info& info) {
+  if (info.rig_name() != rig.name) {
+    fail("--rig '{}' is rig '{}', but the controller runs rig '{}'", rig_path.string(), printable(rig.name),
+         printable(info.rig_name()));
+  }
+  // A controller from before fingerprints sends none: the name is all there is to compare.
+  if (info.rig_fingerprint().empty()) return;
+  const std::string ours = rig_fingerprint(rig);
+  if (info.rig_fingerprint() != ours) {
+    fail(
+        "--rig '{}' and the controller's rig are both named '{}' but differ (fingerprint {} here, {} on the "
+        "controller): give both the same rig file",
+        rig_path.string(), printable(rig.name), ours, printable(info.rig_fingerprint()));
+  }
+}
 
 DomeConnection connect_dome(const std::filesystem::path& rig_path, const std::string& controller_uri,
                             const std::string& camera_uri) {
@@ -14,10 +32,7 @@ DomeConnection connect_dome(const std::filesystem::path& rig_path, const std::st
   sim::register_sim_camera();
   dome.camera = camera::open_camera_uri(camera_uri);
   dome.controller = connect_controller(controller_uri);
-  if (dome.controller->info().rig_name() != dome.rig.name) {
-    fail("--rig '{}' is rig '{}', but the controller runs rig '{}'", rig_path.string(), dome.rig.name,
-         dome.controller->info().rig_name());
-  }
+  check_same_rig(dome.rig, rig_path, dome.controller->info());
   return dome;
 }
 

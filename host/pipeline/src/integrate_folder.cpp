@@ -4,6 +4,7 @@
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/mask.hpp"
 #include "lightstage/host/io/normal_map.hpp"
+#include "lightstage/host/io/output_folder.hpp"
 #include "lightstage/host/io/solve_output.hpp"
 #include "lightstage/host/surface/depth_prior.hpp"
 #include "lightstage/host/surface/surface_output.hpp"
@@ -26,6 +27,7 @@ cv::Mat read_albedo(const std::filesystem::path& path) {
 
 IntegrateReport integrate_folder(const IntegrateSettings& a, const surface::SurfaceProgress& on_progress) {
   if (a.normals.empty() && a.input.empty()) fail("integrate: give --normals N.png or --input RESULT_DIR");
+  io::require_separate_output(a.out, {a.input});
   // A solve folder gives the normals and the albedo (as albedo.png shows it) unless they are given.
   std::optional<io::SolveFolder> folder;
   if (!a.input.empty()) folder = io::read_solve_folder(a.input);

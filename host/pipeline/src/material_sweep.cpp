@@ -5,6 +5,7 @@
 #include "lightstage/host/eval/angular_error.hpp"
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/shadow_threshold.hpp"
 #include "lightstage/pipeline/solve_methods.hpp"
 #include "lightstage/pipeline/synthetic_observations.hpp"
 #include "lightstage/sim/material.hpp"
@@ -36,6 +37,8 @@ SolveResult run_method(const std::string& name, const Observations& obs,
   args.falloff = options.falloff;
   args.threads = options.threads;
   args.resolve();
+  // The shadow threshold `solve` would estimate from these observations (shadow_threshold.hpp).
+  args.use_data_shadow_threshold(estimate_shadow_threshold(obs).value);
   args.robust.t_low = RobustOptions{}.t_low;  // the robust method keeps its own selection
   if (name == "lambert-low") {
     args.l2.shadow_threshold = 1e-6;

@@ -2,11 +2,15 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/normal_map.hpp"
+#include "lightstage/host/io/output_folder.hpp"
 #include "lightstage/host/io/stack_io.hpp"
+
+#include <fstream>
 
 namespace lightstage::pipeline {
 
 ReflectometryReport fit_stack_reflectance(const ReflectometrySettings& settings) {
+  if (!settings.out.empty()) io::require_separate_output(settings.out, {settings.input});
   const ImageStack stack = io::load_stack(settings.input);
   cv::Mat normals;
   if (!settings.normals.empty()) {
@@ -30,6 +34,13 @@ ReflectometryReport fit_stack_reflectance(const ReflectometrySettings& settings)
                  {"shadow_threshold", settings.samples.shadow_threshold},
                  {"fits", nlohmann::json::array()}};
   for (const auto& fit : report.fits) report.json["fits"].push_back(fit.to_json());
+  if (!settings.out.empty()) {
+    std::filesystem::create_directories(settings.out);
+    const std::filesystem::path file = settings.out / "reflectance.json";
+    std::ofstream stream(file);
+    stream << report.json.dump(2) << "\n";
+    if (!stream) fail("{}: cannot write", file.string());
+  }
   return report;
 }
 

@@ -2,6 +2,7 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/image_io.hpp"
+#include "lightstage/host/io/output_folder.hpp"
 #include "lightstage/host/reflectance/relight.hpp"
 
 #include <fmt/format.h>
@@ -13,6 +14,7 @@ namespace lightstage::pipeline {
 
 nlohmann::json relight_folder(const RelightSettings& settings) {
   if (settings.lights.empty()) fail("relight: give at least one --light x,y,z or --turntable N");
+  io::require_separate_output(settings.out, {settings.input});
   const RelightModel model = load_relight_model(settings.input);
   std::vector<cv::Mat> frames;
   std::vector<float> all;

@@ -3,6 +3,7 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
 #include "lightstage/common/rig.hpp"
+#include "lightstage/host/io/output_folder.hpp"
 #include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/io/stack_io.hpp"
 #include "lightstage/sim/natural_capture.hpp"
@@ -22,13 +23,20 @@ sim::NaturalLightingKind parse_environment(const std::string& text) {
   fail("--environment: '{}' is neither area-lights nor sh", text);
 }
 
+// A folder that holds something (a capture, another stack) is not written over unless asked.
+void check_out(const std::filesystem::path& out, bool overwrite) {
+  if (!overwrite)
+    io::require_empty_folder(out, "--out", "use another --out, or --force to write the stack over it");
+}
+
 }  // namespace
 
 nlohmann::json simulate_natural_to_folder(const std::filesystem::path& rig_path,
                                           const sim::SimulateOptions& options, const NaturalSimulation& args,
                                           const std::filesystem::path& out,
-                                          const sim::FrameProgress& on_frames) {
+                                          const sim::FrameProgress& on_frames, bool overwrite) {
   options.check();
+  check_out(out, overwrite);
   const Rig rig = load_rig(rig_path);
   sim::NaturalCaptureOptions capture;
   capture.lighting.kind = parse_environment(args.environment);
@@ -99,8 +107,10 @@ nlohmann::json simulate_natural_to_folder(const std::filesystem::path& rig_path,
 }
 
 nlohmann::json simulate_to_folder(const std::filesystem::path& rig_path, const sim::SimulateOptions& options,
-                                  const std::filesystem::path& out, const sim::FrameProgress& on_frames) {
+                                  const std::filesystem::path& out, const sim::FrameProgress& on_frames,
+                                  bool overwrite) {
   options.check();
+  check_out(out, overwrite);
   const Rig rig = load_rig(rig_path);
   const auto start = std::chrono::steady_clock::now();
   const ImageStack stack = sim::simulate_stack(rig, options, on_frames);

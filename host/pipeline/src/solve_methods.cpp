@@ -1,7 +1,9 @@
 #include "lightstage/pipeline/solve_methods.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/log.hpp"
 #include "lightstage/pipeline/shape_prior_method.hpp"
+#include "lightstage/pipeline/solve_checks.hpp"
 
 #include <fmt/format.h>
 
@@ -79,8 +81,42 @@ void register_solve_method(SolveMethod method) {
   registry().push_back(std::move(method));
 }
 
+SolveResult solve_with(const Observations& observations, const SolveSettings& settings,
+                       const ShadowThreshold& data_threshold) {
+  const SolveMethod& method = find_solve_method(settings.method);
+  const bool shape_prior = settings.method == "shape-prior";
+  if (!shape_prior) check_light_rank(observations);  // shape-prior estimates its own lighting
+  ShadowThreshold used = data_threshold;
+  SolveSettings chosen = settings;
+  if (settings.shadow_threshold) {
+    used = ShadowThreshold{};
+    used.value = *settings.shadow_threshold;
+    used.source = "flag";
+  } else {
+    chosen.use_data_shadow_threshold(used.value);
+  }
+  const std::vector<std::string> warnings = method_warnings(settings.method, observations);
+  for (const auto& warning : warnings) logger("host")->warn("{}", warning);
+  SolveResult result = method.solve(observations, chosen);
+  nlohmann::json threshold = used.to_json();
+  threshold["used_by_l2"] = settings.method == "l2" ? settings.shadow_threshold.has_value() : false;
+  result.parameters["shadow_threshold_choice"] = threshold;
+  if (!warnings.empty()) result.parameters["warnings"] = warnings;
+  // A perspective shape prior sees surfaces whose normals have z < 0; an orthographic camera does not.
+  if (!(shape_prior && !settings.shape_prior.intrinsics.empty())) {
+    const std::size_t facing_away = clamp_facing_away(result);
+    result.summary.findings.push_back(
+        {"normals_facing_away", facing_away,
+         facing_away == 0 ? std::string{}
+                          : fmt::format("{} normals facing away clamped to the horizon", facing_away)});
+    result.summary.message = result.summary.format_message();
+  }
+  return result;
+}
+
 SolveResult solve_with(const Observations& observations, const SolveSettings& settings) {
-  return find_solve_method(settings.method).solve(observations, settings);
+  return solve_with(observations, settings,
+                    settings.shadow_threshold ? ShadowThreshold{} : estimate_shadow_threshold(observations));
 }
 
 SolveWork solve_work(const SolveSettings& settings, const Observations& observations) {

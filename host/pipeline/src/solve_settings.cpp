@@ -23,6 +23,11 @@ void SolveSettings::set_progress(const SolveProgress& progress) {
   shape_prior.options.progress = progress;
 }
 
+void SolveSettings::use_data_shadow_threshold(double value) {
+  robust.shadow_threshold = monotonic.shadow_threshold = bipolynomial.shadow_threshold = value;
+  automatic.monotonic.shadow_threshold = automatic.bipolynomial.shadow_threshold = value;
+}
+
 void SolveSettings::resolve() {
   find_solve_method(method);  // names the known methods when unknown
   radiometry.clamp_to_one = !no_clamp;

@@ -91,7 +91,7 @@ py::dict solve(const fs::path& input, const std::string& method, const std::opti
     py::gil_scoped_release unlocked;  // the solve is long and touches no Python object
     const pipeline::SolveInput prepared =
         pipeline::load_solve_input(input, settings.radiometry, light_calibration);
-    result = pipeline::solve_with(prepared.observations, settings);
+    result = pipeline::solve_with(prepared.observations, settings, prepared.shadow);
     if (prepared.ground_truth && !prepared.ground_truth->normals.empty())
       error = angular_error(result.normals, prepared.ground_truth->normals, prepared.observations.mask).stats;
   }

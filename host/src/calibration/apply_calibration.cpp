@@ -66,6 +66,35 @@ std::vector<std::size_t> match(const LightCalibration& cal, const ImageStack& st
   return result;
 }
 
+// A frame's exposure × gain, 1 when the stack does not record it.
+double exposure_factor(const Frame& frame) {
+  return (frame.exposure_us > 0 ? frame.exposure_us : 1.0) * (frame.gain > 0 ? frame.gain : 1.0);
+}
+
+// What a frame's light intensity becomes when the calibration measured the
+// lights' relative intensities: the calibrated value replaces the stack's
+// relative part (which already holds whatever brightness the stack believed
+// each LED has: multiplying would count it twice), while the stack's overall
+// scale and each frame's exposure × gain stay, so albedo keeps its units and
+// frames of different exposures stay comparable.
+std::vector<Vec3> replaced_intensities(const ImageStack& stack, const LightCalibration& cal,
+                                       const std::vector<std::size_t>& light_of_frame) {
+  Vec3 scale = Vec3::Zero();
+  double exposure = 0;
+  for (const Frame& frame : stack.frames) {
+    scale += frame.light_intensity;
+    exposure += exposure_factor(frame);
+  }
+  const auto frames = static_cast<double>(stack.frames.size());
+  scale /= frames;
+  exposure /= frames;
+  std::vector<Vec3> result;
+  for (std::size_t f = 0; f < stack.frames.size(); ++f)
+    result.push_back(scale *
+                     (cal.lights[light_of_frame[f]].intensity * exposure_factor(stack.frames[f]) / exposure));
+  return result;
+}
+
 }  // namespace
 
 nlohmann::json StackCalibration::describe() const {
@@ -73,7 +102,8 @@ nlohmann::json StackCalibration::describe() const {
                    {"matched_by", matched_by},
                    {"direction_method", calibration.direction_method},
                    {"lights", calibration.lights.size()},
-                   {"led_positions", calibration.has_positions()}};
+                   {"led_positions", calibration.has_positions()},
+                   {"intensities_replaced", intensities_replaced}};
   return j;
 }
 
@@ -83,13 +113,17 @@ StackCalibration apply_calibration_file(const fs::path& file, const fs::path& st
   const bool lp = file.extension() == ".lp" || file.extension() == ".LP";
   result.calibration = lp ? from_lp(file) : read_calibration(file);
   result.light_of_frame = match(result.calibration, stack, file, &result.matched_by);
+  result.intensities_replaced = !result.calibration.intensity_source.is_null();
+  const std::vector<Vec3> intensities =
+      result.intensities_replaced ? replaced_intensities(stack, result.calibration, result.light_of_frame)
+                                  : std::vector<Vec3>{};
   for (std::size_t f = 0; f < stack.frames.size(); ++f) {
     const CalibratedLight& light = result.calibration.lights[result.light_of_frame[f]];
     if (!light.measured)
       fail("{}: light {} ({}) was not measured, but frame {} ({}) needs it", file.string(),
            result.light_of_frame[f], light.image, f, stack.frames[f].filename);
     stack.frames[f].light_direction = light.direction;
-    stack.frames[f].light_intensity *= light.intensity;
+    if (result.intensities_replaced) stack.frames[f].light_intensity = intensities[f];
     if (light.position_mm) stack.frames[f].led_position_mm = light.position_mm;
   }
   std::error_code error;

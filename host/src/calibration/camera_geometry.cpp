@@ -1,6 +1,7 @@
 #include "lightstage/host/calibration/camera_geometry.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/printable.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -13,7 +14,7 @@ using nlohmann::json;
 double number_at(const json& j, const char* key, const std::string& where) {
   const auto it = j.find(key);
   if (it == j.end()) fail("{}.{}: missing", where, key);
-  if (!it->is_number()) fail("{}.{}: expected a number, got {}", where, key, it->dump());
+  if (!it->is_number()) fail("{}.{}: expected a number, got {}", where, key, printable(it->dump()));
   const double value = it->get<double>();
   if (!std::isfinite(value)) fail("{}.{}: not a finite number", where, key);
   return value;
@@ -24,7 +25,7 @@ Vec3 vec3_at(const json& j, const char* key, const std::string& where) {
   if (it == j.end()) fail("{}.{}: missing", where, key);
   if (!it->is_array() || it->size() != 3 || !(*it)[0].is_number() || !(*it)[1].is_number() ||
       !(*it)[2].is_number()) {
-    fail("{}.{}: expected [x, y, z], got {}", where, key, it->dump());
+    fail("{}.{}: expected [x, y, z], got {}", where, key, printable(it->dump()));
   }
   const Vec3 v((*it)[0].get<double>(), (*it)[1].get<double>(), (*it)[2].get<double>());
   if (!v.allFinite()) fail("{}.{}: not finite", where, key);
@@ -97,7 +98,7 @@ CameraGeometry CameraGeometry::from_json(const json& j, const std::string& where
   } else if (model->get<std::string>() == "pinhole") {
     camera.model = CameraModel::kPinhole;
   } else {
-    fail("{}.model: expected \"orthographic\" or \"pinhole\", got {}", where, model->dump());
+    fail("{}.model: expected \"orthographic\" or \"pinhole\", got {}", where, printable(model->dump()));
   }
   const double width = number_at(j, "width", where), height = number_at(j, "height", where);
   if (width < 1 || height < 1 || width > 65536 || height > 65536 || width != std::floor(width) ||
@@ -114,13 +115,14 @@ CameraGeometry CameraGeometry::from_json(const json& j, const std::string& where
     camera.focal_px = number_at(j, "focal_px", where);
     if (const auto pp = j.find("principal_point_px"); pp != j.end()) {
       if (!pp->is_array() || pp->size() != 2 || !(*pp)[0].is_number() || !(*pp)[1].is_number())
-        fail("{}.principal_point_px: expected [u, v], got {}", where, pp->dump());
+        fail("{}.principal_point_px: expected [u, v], got {}", where, printable(pp->dump()));
       camera.principal_point_px = Vec2((*pp)[0].get<double>(), (*pp)[1].get<double>());
     }
   }
   camera.metric = true;
   if (const auto metric = j.find("metric"); metric != j.end()) {
-    if (!metric->is_boolean()) fail("{}.metric: expected true or false, got {}", where, metric->dump());
+    if (!metric->is_boolean())
+      fail("{}.metric: expected true or false, got {}", where, printable(metric->dump()));
     camera.metric = metric->get<bool>();
   }
   try {

@@ -1,6 +1,7 @@
 #include "lightstage/host/calibration/light_calibration.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/printable.hpp"
 #include "util/atomic_file.hpp"
 
 #include <fmt/format.h>
@@ -24,21 +25,21 @@ const json& member(const json& j, const char* key, const std::string& where) {
 
 Vec3 vec3_value(const json& v, const std::string& where) {
   if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
-    fail("{}: expected [x, y, z], got {}", where, v.dump());
+    fail("{}: expected [x, y, z], got {}", where, printable(v.dump()));
   const Vec3 result(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
   if (!result.allFinite()) fail("{}: not finite", where);
   return result;
 }
 
 double number_value(const json& v, const std::string& where) {
-  if (!v.is_number()) fail("{}: expected a number, got {}", where, v.dump());
+  if (!v.is_number()) fail("{}: expected a number, got {}", where, printable(v.dump()));
   const double value = v.get<double>();
   if (!std::isfinite(value)) fail("{}: not a finite number", where);
   return value;
 }
 
 std::string string_value(const json& v, const std::string& where) {
-  if (!v.is_string()) fail("{}: expected a string, got {}", where, v.dump());
+  if (!v.is_string()) fail("{}: expected a string, got {}", where, printable(v.dump()));
   return v.get<std::string>();
 }
 
@@ -115,7 +116,7 @@ LightCalibration calibration_from_json(const json& j, const std::string& source)
   const json& version = member(j, "version", source);
   if (!version.is_number_integer() || version.get<long long>() < 1 ||
       version.get<long long>() > kCalibrationVersion) {
-    fail("{}: version: unsupported value {} (this build reads 1..{})", source, version.dump(),
+    fail("{}: version: unsupported value {} (this build reads 1..{})", source, printable(version.dump()),
          kCalibrationVersion);
   }
   LightCalibration c;
@@ -140,11 +141,12 @@ LightCalibration calibration_from_json(const json& j, const std::string& source)
     light.image = string_value(member(entry, "image", where), where + ".image");
     if (const auto it = entry.find("led_id"); it != entry.end() && !it->is_null()) {
       if (!it->is_number_integer() || it->get<long long>() < -1 || it->get<long long>() > 1000000)
-        fail("{}.led_id: expected an integer id, got {}", where, it->dump());
+        fail("{}.led_id: expected an integer id, got {}", where, printable(it->dump()));
       light.led_id = it->get<int>();
     }
     const json& measured = member(entry, "measured", where);
-    if (!measured.is_boolean()) fail("{}.measured: expected true or false, got {}", where, measured.dump());
+    if (!measured.is_boolean())
+      fail("{}.measured: expected true or false, got {}", where, printable(measured.dump()));
     light.measured = measured.get<bool>();
     light.direction = vec3_value(member(entry, "direction", where), where + ".direction");
     if (light.measured && std::abs(light.direction.norm() - 1) > 1e-3)
@@ -185,7 +187,7 @@ LightCalibration read_calibration(const std::filesystem::path& path) {
   try {
     j = json::parse(in);
   } catch (const json::exception& e) {
-    fail("{}: not valid JSON: {}", path.string(), e.what());
+    fail("{}: not valid JSON: {}", path.string(), printable(e.what(), 4 * kPrintableChars));
   }
   return calibration_from_json(j, path.string());
 }

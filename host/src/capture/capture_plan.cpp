@@ -77,6 +77,40 @@ std::vector<int> plan_led_ids(const Rig& rig, const std::vector<int>& requested)
   return ids;
 }
 
+std::uint32_t open_loop_on_us(double exposure_us) {
+  // Less a rounding error's worth, so the longest exposure an LED allows fits its limit exactly.
+  return static_cast<std::uint32_t>(std::ceil(exposure_us * 1.05 + 300 - 1e-6));
+}
+
+std::uint32_t strobe_timeout_us(double exposure_us, double max_on_us, std::uint32_t settle_us) {
+  // A camera may start its exposure late (trigger latency, a busy link); the strobe says when it ends.
+  constexpr double kLateCameraUs = 200'000;
+  double timeout = std::max<double>(open_loop_on_us(exposure_us), exposure_us + kLateCameraUs);
+  if (max_on_us > 0) timeout = std::min(timeout, std::floor(max_on_us - settle_us));
+  return static_cast<std::uint32_t>(std::clamp(timeout, 1.0, 4e9));
+}
+
+void check_on_time(const CapturePlan& plan, const OnTimeLimits& max_on_us, std::uint32_t settle_us) {
+  for (const PlannedFrame& frame : plan.frames) {
+    const auto limit = max_on_us.find(frame.led_id);
+    if (limit == max_on_us.end() || !(limit->second > 0)) continue;
+    std::vector<std::size_t> exposures = frame.bracket;
+    if (exposures.empty()) exposures.push_back(frame.exposure);
+    for (const std::size_t e : exposures) {
+      const double exposure_us = plan.exposures_us.at(e);
+      const double on_us = settle_us + static_cast<double>(open_loop_on_us(exposure_us));
+      if (on_us > limit->second) {
+        fail(
+            "capture: LED {} at {} us would be lit for {} us (settle {} us, exposure and trigger latency), "
+            "over "
+            "its max_on_us {} us; use a shorter --exposure-us (at most {:.0f} us) or --settle-us",
+            frame.led_id, exposure_us, on_us, settle_us, limit->second,
+            std::floor((limit->second - settle_us - 300) / 1.05));
+      }
+    }
+  }
+}
+
 double longest_exposure_us(const Led& led, const camera::ControlInfo& range, std::uint32_t settle_us) {
   const double longest = std::min(range.exposure_max_us > 0 ? range.exposure_max_us : 1e12,
                                   (led.limits.max_on_us - settle_us - 300) / 1.05);

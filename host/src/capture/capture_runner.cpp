@@ -47,6 +47,26 @@ void CaptureRunner::start() {
   cam_.start();
 }
 
+double CaptureRunner::max_on_us(int led_id) const {
+  if (led_id < 0) return 0;
+  for (const proto::Led& led : controller_.info().leds()) {
+    if (static_cast<int>(led.id()) == led_id) return led.max_on_us();
+  }
+  return 0;
+}
+
+OnTimeLimits CaptureRunner::on_time_limits(const Rig& rig) const {
+  OnTimeLimits limits;
+  for (const Led& led : rig.leds) limits[led.id] = led.limits.max_on_us;
+  for (const proto::Led& led : controller_.info().leds()) {
+    // The controller enforces its own: the tighter one counts.
+    const int id = static_cast<int>(led.id());
+    if (led.max_on_us() > 0 && (!(limits[id] > 0) || led.max_on_us() < limits[id]))
+      limits[id] = led.max_on_us();
+  }
+  return limits;
+}
+
 std::size_t CaptureRunner::steps_per_sequence() const {
   constexpr std::size_t kFramesPerSequence = 12;
   return std::clamp<std::size_t>(controller_.info().capabilities().max_sequence_steps(), 1,
@@ -60,8 +80,13 @@ void CaptureRunner::set_exposure(double exposure_us) {
   // Cameras that cannot say which frame a change reached (V4L2) need a few
   // frames to settle: take them dark and throw them away.
   const int latency = cam_.control_info().latency_frames;
-  if (latency > 0 && hardware_)
-    run_batch_once(std::vector<Shot>(static_cast<std::size_t>(latency), Shot{-1, exposure_us}));
+  if (latency > 0 && hardware_) {
+    try {
+      run_batch_once(std::vector<Shot>(static_cast<std::size_t>(latency), Shot{-1, exposure_us}));
+    } catch (const BatchAborted& aborted) {
+      throw Error(aborted.what());  // its frames are thrown away: none belongs to the batch's shots
+    }
+  }
 }
 
 Batch CaptureRunner::run_batch(const std::vector<Shot>& shots) {
@@ -77,7 +102,15 @@ Batch CaptureRunner::run_batch(const std::vector<Shot>& shots) {
                             led_name(shots[missing[0]].led_id));
     std::vector<Shot> again;
     for (const std::size_t i : missing) again.push_back(shots[i]);
-    Batch retake = hardware_ ? run_batch_once(again) : run_software_batch(again);
+    Batch retake;
+    try {
+      retake = hardware_ ? run_batch_once(again) : run_software_batch(again);
+    } catch (BatchAborted& aborted) {
+      // What the first run and the aborted retake took, by shot of this batch.
+      for (auto& [j, taken] : aborted.partial.taken) batch.taken[missing[j]] = std::move(taken);
+      aborted.partial = std::move(batch);
+      throw;
+    }
     batch.retakes += again.size();
     batch.duplicates += retake.duplicates;
     batch.camera_wait_seconds += retake.camera_wait_seconds;
@@ -108,9 +141,11 @@ Batch CaptureRunner::run_batch_once(const std::vector<Shot>& shots) {
     step->set_settle_us(options_.settle_us);
     step->set_trigger(true);
     // Open loop: lit a little longer than the exposure, for the camera's trigger latency.
-    step->set_exposure_us(static_cast<std::uint32_t>(std::ceil(exposure_us * 1.05 + 300)));
+    step->set_exposure_us(open_loop_on_us(exposure_us));
     step->set_wait_strobe(closed_loop_);
-    step->set_strobe_timeout_us(static_cast<std::uint32_t>(std::min(4e9, 2 * exposure_us + 200'000)));
+    // The controller counts the whole timeout against the LED's on-time limit.
+    step->set_strobe_timeout_us(
+        strobe_timeout_us(exposure_us, max_on_us(shots[i].led_id), options_.settle_us));
     step->set_gap_us(options_.gap_us);
     step->set_tag(static_cast<std::uint32_t>(i));
   }
@@ -154,10 +189,8 @@ Batch CaptureRunner::run_batch_once(const std::vector<Shot>& shots) {
   Batch batch;
   batch.camera_wait_seconds = seconds_since(controller_done);
   if (camera_error) std::rethrow_exception(camera_error);
-  if (!run.ok()) {
-    throw Error(fmt::format("controller: sequence {} ended {}: {}", sequence.id(),
-                            proto::Outcome_Name(run.done.outcome()), run.done.detail()));
-  }
+  // Steps cut short by an abort are not exposed in full: their frames are not kept.
+  std::erase_if(run.steps, [](const proto::StepEvent& e) { return e.outcome() != proto::OK; });
   std::vector<StepTiming> steps;
   for (const auto& e : run.steps) steps.push_back({e.trigger_ns(), exposure_us});
   std::vector<FrameTiming> timings;
@@ -174,6 +207,12 @@ Batch CaptureRunner::run_batch_once(const std::vector<Shot>& shots) {
     if (!match.frame_of_step[k]) continue;
     const std::size_t shot = run.steps[k].tag();
     batch.taken[shot] = Taken{std::move(frames[*match.frame_of_step[k]]), run.steps[k]};
+  }
+  if (!run.ok()) {
+    throw BatchAborted(fmt::format("controller: sequence {} ended {} after {} of {} steps: {}", sequence.id(),
+                                   proto::Outcome_Name(run.done.outcome()), run.steps.size(), shots.size(),
+                                   run.done.detail()),
+                       std::move(batch));
   }
   return batch;
 }
@@ -208,11 +247,19 @@ Batch CaptureRunner::run_software_batch(const std::vector<Shot>& shots) {
 }
 
 Batch CaptureRunner::run_counted(const std::vector<Shot>& shots) {
-  Batch batch = run_batch(shots);
-  stats_.retakes += batch.retakes;
-  stats_.duplicates += batch.duplicates;
-  stats_.camera_wait_seconds += batch.camera_wait_seconds;
-  return batch;
+  const auto count = [this](const Batch& batch) {
+    stats_.retakes += batch.retakes;
+    stats_.duplicates += batch.duplicates;
+    stats_.camera_wait_seconds += batch.camera_wait_seconds;
+  };
+  try {
+    Batch batch = run_batch(shots);
+    count(batch);
+    return batch;
+  } catch (BatchAborted& aborted) {
+    count(aborted.partial);
+    throw;
+  }
 }
 
 void CaptureRunner::take_frames(const CapturePlan& plan, const std::vector<bool>& done,
@@ -233,11 +280,20 @@ void CaptureRunner::take_frames(const CapturePlan& plan, const std::vector<bool>
         const std::size_t end = std::min(shots.size(), begin + max_steps);
         const std::vector<Shot> part(shots.begin() + static_cast<std::ptrdiff_t>(begin),
                                      shots.begin() + static_cast<std::ptrdiff_t>(end));
-        Batch batch = run_counted(part);
-        for (auto& [k, taken] : batch.taken) {
-          std::vector<Take> takes{Take{exposure, std::move(taken)}};
-          on_frame(frame_of[begin + k], takes);
+        const auto hand_on = [&](Batch& batch) {
+          for (auto& [k, taken] : batch.taken) {
+            std::vector<Take> takes{Take{exposure, std::move(taken)}};
+            on_frame(frame_of[begin + k], takes);
+          }
+        };
+        Batch batch;
+        try {
+          batch = run_counted(part);
+        } catch (BatchAborted& aborted) {
+          hand_on(aborted.partial);  // exposed before the abort: kept, not taken again
+          throw;
         }
+        hand_on(batch);
       }
     }
     return;
@@ -264,8 +320,21 @@ void CaptureRunner::take_frames(const CapturePlan& plan, const std::vector<bool>
           shots.push_back({plan.frames[i].led_id, plan.exposures_us[exposure]});
           owner.push_back(i);
         }
-        Batch batch = run_counted(shots);
-        for (auto& [k, taken] : batch.taken) takes_of[owner[k]].push_back(Take{exposure, std::move(taken)});
+        const auto add = [&](Batch& batch) {
+          for (auto& [k, taken] : batch.taken) takes_of[owner[k]].push_back(Take{exposure, std::move(taken)});
+        };
+        Batch batch;
+        try {
+          batch = run_counted(shots);
+        } catch (BatchAborted& aborted) {
+          // LEDs whose whole bracket is in by now are kept; the others are taken again on --resume.
+          add(aborted.partial);
+          for (const std::size_t i : group) {
+            if (takes_of[i].size() == plan.frames[i].bracket.size()) on_frame(i, takes_of[i]);
+          }
+          throw;
+        }
+        add(batch);
       }
       for (const std::size_t i : group) on_frame(i, takes_of.at(i));
     }

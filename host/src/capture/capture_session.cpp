@@ -5,6 +5,7 @@
 #include "lightstage/host/capture/capture_runner.hpp"
 #include "lightstage/host/capture/response_curve.hpp"
 #include "lightstage/host/capture/stack_writer.hpp"
+#include "lightstage/host/io/output_folder.hpp"
 #include "lightstage/host/progress.hpp"
 
 #include <fmt/format.h>
@@ -39,17 +40,13 @@ CaptureReport run_capture(const Rig& rig, ControllerClient& controller, camera::
                           const InverseResponse* response) {
   const Clock::time_point started = Clock::now();
   const std::vector<int> led_ids = plan_led_ids(rig, options.led_ids);
-  const bool exists = fs::exists(options.out) && !fs::is_empty(options.out);
-  if (exists && !options.resume) {
-    fail(
-        "{}: the folder exists and is not empty (use --resume to complete an interrupted capture, or another "
-        "--out)",
-        options.out.string());
-  }
+  if (!options.resume)
+    io::require_empty_folder(options.out, "--out",
+                             "use --resume to complete an interrupted capture, or another --out");
   fs::create_directories(options.out);
   CaptureStackWriter writer(rig, options.out, response);
   PreviousPlan previous;
-  if (options.resume) previous = writer.resume(led_ids, options.bracket_stops);
+  if (options.resume) previous = writer.resume(led_ids, options);
 
   runner.start();
   const StopCamera stop_camera{runner};
@@ -90,10 +87,12 @@ CaptureReport run_capture(const Rig& rig, ControllerClient& controller, camera::
   }
   const CapturePlan plan =
       make_plan(led_ids, exposure_of, bracket_of, options.bracket_stops, options.dark_frames);
+  check_on_time(plan, runner.on_time_limits(rig), options.settle_us);
 
   const camera::CameraInfo camera_info = cam.info();
-  writer.set_plan(plan, {runner.gain(), runner.closed_loop(), runner.hardware_trigger(), camera_info,
-                         controller.info().firmware_version(), controller.info().rig_name()});
+  writer.set_plan(plan,
+                  {runner.gain(), runner.closed_loop(), runner.hardware_trigger(), camera_info,
+                   controller.info().firmware_version(), controller.info().rig_name(), options.exposure_us});
   writer.write_index(false);
 
   CaptureReport report;

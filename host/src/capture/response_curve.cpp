@@ -104,6 +104,60 @@ InverseResponse InverseResponse::load(const std::filesystem::path& file) {
   }
 }
 
+std::vector<double> response_bracket_us(double reference_us) {
+  std::vector<double> exposures;
+  for (int i = 0; i < 8; ++i) exposures.push_back(reference_us / 16 * std::exp2(i));
+  return exposures;
+}
+
+std::vector<double> linearity_bracket_us(double reference_us) {
+  std::vector<double> exposures;
+  for (int i = -2; i <= 2; ++i) exposures.push_back(reference_us * std::exp2(0.5 * i));
+  return exposures;
+}
+
+namespace {
+
+// Debevec–Malik weighs a value by its distance from the ends of the range, so
+// the curve near 0 and near full scale is held only by its smoothness term,
+// which bends it the wrong way (too bright in the shadows, flat towards the
+// top). Within [kTrustedLow, kTrustedHigh] of the 8-bit range the data holds
+// it; beyond, the curve goes on as the power law (a straight line in log-log)
+// of the trusted values next to each end.
+constexpr int kTrustedLow = 26;    // ~10% of full scale
+constexpr int kTrustedHigh = 230;  // ~90%
+
+// The slope of log radiance over log value, least squares over [first, last].
+double log_log_slope(const std::vector<double>& log_radiance, int first, int last) {
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  const int n = last - first + 1;
+  for (int z = first; z <= last; ++z) {
+    const double x = std::log(static_cast<double>(z));
+    const double y = log_radiance[static_cast<std::size_t>(z)];
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    sxy += x * y;
+  }
+  const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+  return slope > 0 && std::isfinite(slope) ? slope : 1.0;  // a fit that is no response: linear
+}
+
+void extend_ends(std::vector<double>& log_radiance) {
+  const int top = static_cast<int>(log_radiance.size()) - 1;
+  const auto extend = [&](int from, double slope, int z) {
+    log_radiance[static_cast<std::size_t>(z)] =
+        log_radiance[static_cast<std::size_t>(from)] +
+        slope * (std::log(static_cast<double>(z)) - std::log(static_cast<double>(from)));
+  };
+  const double low_slope = log_log_slope(log_radiance, kTrustedLow, 2 * kTrustedLow);
+  for (int z = 1; z < kTrustedLow; ++z) extend(kTrustedLow, low_slope, z);
+  const double high_slope = log_log_slope(log_radiance, kTrustedHigh * 4 / 5, kTrustedHigh);
+  for (int z = kTrustedHigh + 1; z <= top; ++z) extend(kTrustedHigh, high_slope, z);
+}
+
+}  // namespace
+
 InverseResponse calibrate_response(const std::vector<cv::Mat>& images,
                                    const std::vector<double>& exposures_us, int bits) {
   if (images.size() != exposures_us.size()) {
@@ -129,14 +183,19 @@ InverseResponse calibrate_response(const std::vector<cv::Mat>& images,
   cv::Mat curve;
   auto debevec = cv::createCalibrateDebevec(120, 10.0f, false);
   debevec->process(eight, curve, times);
+  std::vector<double> log_radiance(256);
+  for (int k = 0; k < 256; ++k) {
+    const double value = curve.at<cv::Vec3f>(k)[0];
+    if (!(value > 0) || !std::isfinite(value)) fail("response: the fit failed (no signal in the bracket?)");
+    log_radiance[static_cast<std::size_t>(k)] = std::log(value);
+  }
+  extend_ends(log_radiance);
+  // Scale so full scale is 1; monotone against what noise is left.
   std::vector<double> knots(256);
-  for (int k = 0; k < 256; ++k) knots[static_cast<std::size_t>(k)] = curve.at<cv::Vec3f>(k)[0];
-  // Scale so full scale is 1, and force monotonicity (noise in the fit at the ends).
   knots[0] = 0;
-  for (std::size_t k = 1; k < knots.size(); ++k) knots[k] = std::max(knots[k], knots[k - 1]);
-  const double top = knots.back();
-  if (!(top > 0)) fail("response: the fit failed (no signal in the bracket?)");
-  for (double& v : knots) v /= top;
+  for (std::size_t k = 1; k < knots.size(); ++k)
+    knots[k] = std::max(std::exp(log_radiance[k] - log_radiance.back()), knots[k - 1]);
+  knots.back() = 1;
   return InverseResponse(bits, std::move(knots));
 }
 

@@ -7,7 +7,6 @@
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/io/stack_io.hpp"
-#include "util/atomic_file.hpp"
 #include "util/utc_time.hpp"
 
 #include <fmt/format.h>
@@ -35,13 +34,40 @@ nlohmann::json stamps(const Taken& taken) {
           {"leds_off_ns", taken.step.leds_off_ns()}};
 }
 
+std::string exposure_text(const std::optional<double>& fixed_us) {
+  return fixed_us ? fmt::format("--exposure-us {}", *fixed_us) : std::string("automatic exposure");
+}
+
+// A resumed capture goes on at the exposures it was planned with; a run asking
+// for others would mix them silently, so it is refused as other LEDs are.
+void check_same_exposure(const fs::path& manifest_path, const io::CaptureManifest& manifest,
+                         const std::optional<double>& asked_us) {
+  if (manifest.fixed_exposure) {
+    const std::optional<double> planned =
+        *manifest.fixed_exposure ? manifest.fixed_exposure_us : std::optional<double>();
+    if (planned != asked_us) {
+      fail("{}: cannot resume: it was planned with {}, this run asks for {}", manifest_path.string(),
+           exposure_text(planned), exposure_text(asked_us));
+    }
+    return;
+  }
+  // Written before the choice was recorded: a fixed exposure must be every LED's.
+  if (!asked_us) return;
+  for (const auto& [id, exposure_us] : manifest.exposure_us) {
+    if (exposure_us != *asked_us) {
+      fail("{}: cannot resume: LED {} was planned at {} us, this run asks for --exposure-us {}",
+           manifest_path.string(), id, exposure_us, *asked_us);
+    }
+  }
+}
+
 }  // namespace
 
 CaptureStackWriter::CaptureStackWriter(const Rig& rig, fs::path out, const InverseResponse* response)
     : rig_(rig), out_(std::move(out)), response_(response) {}
 
-PreviousPlan CaptureStackWriter::resume(const std::vector<int>& led_ids,
-                                        const std::vector<double>& bracket_stops) {
+PreviousPlan CaptureStackWriter::resume(const std::vector<int>& led_ids, const CaptureOptions& asked) {
+  const std::vector<double>& bracket_stops = asked.bracket_stops;
   const fs::path manifest_path = out_ / "manifest.json";
   if (!fs::exists(manifest_path)) return {};
   io::CaptureManifest manifest = io::read_capture_manifest(manifest_path);
@@ -52,6 +78,11 @@ PreviousPlan CaptureStackWriter::resume(const std::vector<int>& led_ids,
   if (manifest.bracket_stops != bracket_stops) {
     fail("{}: cannot resume: it was planned with bracket stops [{}], this run asks for [{}]",
          manifest_path.string(), fmt::join(manifest.bracket_stops, ","), fmt::join(bracket_stops, ","));
+  }
+  check_same_exposure(manifest_path, manifest, asked.exposure_us);
+  if (manifest.dark_frames && *manifest.dark_frames != asked.dark_frames) {
+    fail("{}: cannot resume: it was planned with --dark-frames {}, this run asks for {}",
+         manifest_path.string(), *manifest.dark_frames, asked.dark_frames);
   }
   for (io::CaptureDark& dark : manifest.darks)
     resumed_darks_.emplace_back(dark.exposure_us, Dark{std::move(dark.file), dark.mean, {}});
@@ -237,6 +268,9 @@ void CaptureStackWriter::write_index(bool complete) {
         {"loop", setup_.closed_loop ? "closed" : "open"},
         {"trigger", setup_.hardware_trigger ? "hardware" : "software"},
         {"darks", darks},
+        {"dark_frames", plan_.dark_frames},
+        {"fixed_exposure_us",
+         setup_.fixed_exposure_us ? nlohmann::json(*setup_.fixed_exposure_us) : nlohmann::json()},
         {"bracket_stops", plan_.bracket_stops},
         {"bracket_exposure_us", brackets},
         {"camera",
@@ -247,10 +281,9 @@ void CaptureStackWriter::write_index(bool complete) {
       {"frames", extra_frames}};
   if (stack.frames.empty()) {
     // Nothing to index yet: keep the plan where resume can find it.
-    util::write_text_atomic(out_ / "manifest.json", nlohmann::json{{"format", io::kStackFormat},
-                                                                   {"version", io::kStackFormatVersion},
-                                                                   {"capture", extra["capture"]}}
-                                                        .dump(2));
+    io::write_empty_stack(out_, nlohmann::json{{"format", io::kStackFormat},
+                                               {"version", io::kStackFormatVersion},
+                                               {"capture", extra["capture"]}});
     return;
   }
   io::write_stack(out_, stack, extra, /*write_images=*/false);

@@ -9,7 +9,10 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdint>
+#include <string_view>
 #include <system_error>
+#include <vector>
 
 namespace lightstage::io {
 namespace {
@@ -70,19 +73,16 @@ void write_png(const std::filesystem::path& path, const cv::Mat& image) {
     fail("{}: cannot write as PNG: {}; expected 8- or 16-bit with 1 or 3 channels", path.string(),
          describe_type(image));
   }
-  const auto temporary = util::temporary_sibling(path);
-  bool written = false;
+  // Encoded in memory, so the bytes reach the disk through the one writer that reports errno (a full disk).
+  std::vector<std::uint8_t> png;
+  bool encoded = false;
   try {
-    written = cv::imwrite(temporary.string(), image);
+    encoded = cv::imencode(".png", image, png);
   } catch (const cv::Exception&) {
-    written = false;
+    encoded = false;
   }
-  if (!written) {
-    std::error_code ignored;
-    std::filesystem::remove(temporary, ignored);
-    fail("{}: cannot write PNG (is the folder there and writable?)", path.string());
-  }
-  util::commit_temporary(temporary, path);
+  if (!encoded) fail("{}: cannot encode as PNG", path.string());
+  util::write_text_atomic(path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
 }
 
 void write_png16(const std::filesystem::path& path, const cv::Mat& image) {

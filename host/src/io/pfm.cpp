@@ -14,24 +14,26 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <string_view>
 #include <system_error>
 #include <vector>
 
 namespace lightstage::io {
 namespace {
 
-// Reads the next whitespace-delimited header token.
-bool next_token(const std::string& data, std::size_t& pos, std::string& token) {
+// Reads the next whitespace-delimited header token; a token that runs into
+// the end of `data` may be cut (only the file's first bytes were read).
+bool next_token(std::string_view data, std::size_t& pos, std::string_view& token) {
   while (pos < data.size() && std::isspace(static_cast<unsigned char>(data[pos]))) ++pos;
   const std::size_t start = pos;
   while (pos < data.size() && !std::isspace(static_cast<unsigned char>(data[pos]))) ++pos;
   token = data.substr(start, pos - start);
-  return !token.empty();
+  return !token.empty() && pos < data.size();
 }
 
 // Parses the whole token as a number.
 template <typename T>
-bool parse_whole(const std::string& token, T& value) {
+bool parse_whole(std::string_view token, T& value) {
   const char* begin = token.data();
   const char* end = begin + token.size();
   const auto [next, error] = std::from_chars(begin, end, value);
@@ -44,40 +46,48 @@ std::uint32_t byte_swap(std::uint32_t v) {
 
 }  // namespace
 
+PfmHeader parse_pfm_header(const std::filesystem::path& path, std::string_view bytes) {
+  std::size_t pos = 0;
+  std::string_view magic, width_text, height_text, scale_text;
+  if (!next_token(bytes, pos, magic) || (magic != "PF" && magic != "Pf")) {
+    fail("{}: not a PFM file (expected 'PF' or 'Pf' at the start)", path.string());
+  }
+  if (!next_token(bytes, pos, width_text) || !next_token(bytes, pos, height_text) ||
+      !next_token(bytes, pos, scale_text)) {
+    fail("{}: truncated PFM header", path.string());
+  }
+  PfmHeader header;
+  double scale = 0;
+  if (!parse_whole(width_text, header.width) || !parse_whole(height_text, header.height) ||
+      !parse_whole(scale_text, scale)) {
+    fail("{}: malformed PFM header '{} {} {}'", path.string(), width_text.substr(0, 20),
+         height_text.substr(0, 20), scale_text.substr(0, 20));
+  }
+  if (header.width <= 0 || header.height <= 0 || header.width > 1 << 16 || header.height > 1 << 16) {
+    fail("{}: bad PFM size {}x{}", path.string(), header.width, header.height);
+  }
+  if (scale == 0 || !std::isfinite(scale)) fail("{}: bad PFM scale '{}'", path.string(), scale_text);
+  header.channels = magic == "PF" ? 3 : 1;
+  header.little_endian = scale < 0;
+  header.data_offset = pos + 1;  // exactly one whitespace character ends the header
+  return header;
+}
+
 cv::Mat read_pfm(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) fail("{}: cannot open (no such file or not readable)", path.string());
   const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 
-  std::size_t pos = 0;
-  std::string magic, width_text, height_text, scale_text;
-  if (!next_token(data, pos, magic) || (magic != "PF" && magic != "Pf")) {
-    fail("{}: not a PFM file (expected 'PF' or 'Pf' at the start)", path.string());
-  }
-  if (!next_token(data, pos, width_text) || !next_token(data, pos, height_text) ||
-      !next_token(data, pos, scale_text)) {
-    fail("{}: truncated PFM header", path.string());
-  }
-  int width = 0, height = 0;
-  double scale = 0;
-  if (!parse_whole(width_text, width) || !parse_whole(height_text, height) ||
-      !parse_whole(scale_text, scale)) {
-    fail("{}: malformed PFM header '{} {} {}'", path.string(), width_text, height_text, scale_text);
-  }
-  if (width <= 0 || height <= 0 || width > 1 << 16 || height > 1 << 16) {
-    fail("{}: bad PFM size {}x{}", path.string(), width, height);
-  }
-  if (scale == 0 || !std::isfinite(scale)) fail("{}: bad PFM scale '{}'", path.string(), scale_text);
-  ++pos;  // exactly one whitespace character ends the header
-
-  const int channels = magic == "PF" ? 3 : 1;
+  const PfmHeader header = parse_pfm_header(path, data);
+  const int width = header.width, height = header.height, channels = header.channels;
+  const std::size_t pos = header.data_offset;
   const std::size_t row_values = static_cast<std::size_t>(width) * static_cast<std::size_t>(channels);
   const std::size_t bytes = row_values * static_cast<std::size_t>(height) * sizeof(float);
   if (pos > data.size() || data.size() - pos < bytes) {
     fail("{}: truncated PFM data ({} bytes, expected {})", path.string(),
          pos > data.size() ? 0 : data.size() - pos, bytes);
   }
-  const bool file_little = scale < 0;
+  const bool file_little = header.little_endian;
   const bool swap = file_little != (std::endian::native == std::endian::little);
 
   cv::Mat image(height, width, CV_MAKETYPE(CV_32F, channels));

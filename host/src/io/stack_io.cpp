@@ -1,9 +1,11 @@
 #include "lightstage/host/io/stack_io.hpp"
 
+#include "io/stack_checks.hpp"
 #include "io/stack_manifest.hpp"
 #include "io/text_table.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/parallel.hpp"
+#include "lightstage/common/printable.hpp"
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/mask.hpp"
 #include "lightstage/host/io/normal_map.hpp"
@@ -13,7 +15,10 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <string>
 #include <system_error>
+#include <utility>
+#include <vector>
 
 namespace lightstage::io {
 namespace {
@@ -46,7 +51,8 @@ std::string vec3_lines(const std::vector<Frame>& frames, bool directions) {
 }
 
 // The dark frames the manifest names, each read once and shared by its frames.
-void load_darks(const fs::path& dir, const fs::path& manifest_path, ImageStack& stack) {
+void load_darks(const fs::path& dir, const fs::path& manifest_path, const ImageHeader& frames,
+                ImageStack& stack) {
   std::map<std::string, cv::Mat> darks;
   const cv::Mat& first = stack.frames.front().image;
   for (std::size_t i = 0; i < stack.frames.size(); ++i) {
@@ -59,7 +65,9 @@ void load_darks(const fs::path& dir, const fs::path& manifest_path, ImageStack& 
         fail("{}: frames[{}].dark: '{}' is not in the stack folder", manifest_path.string(), i,
              frame.dark_file);
       }
+      check_declared_size(path, frames, "dark frame");
       cv::Mat dark = read_image(path);
+      check_finite_pixels(path, dark);
       if (dark.size() != first.size() || dark.channels() != first.channels()) {
         fail("{}: dark frame is {} {}, but the images are {} {}", path.string(), size_text(dark),
              type_text(dark), size_text(first), type_text(first));
@@ -103,6 +111,33 @@ std::map<std::string, cv::Mat> darks_to_write(const fs::path& dir, const ImageSt
   return darks;
 }
 
+// The index files (names, lights, manifest) must agree with each other: all
+// are written to temporaries first and renamed only when every one is on
+// disk, so a failed write (a full disk) leaves the previous index whole.
+void write_index_files(const fs::path& dir, const std::vector<std::pair<std::string, std::string>>& files) {
+  std::vector<std::pair<fs::path, fs::path>> staged;  // (temporary, target)
+  const auto discard = [&] {
+    std::error_code ignored;
+    for (const auto& [temporary, target] : staged) fs::remove(temporary, ignored);
+  };
+  try {
+    for (const auto& [name, text] : files)
+      staged.emplace_back(util::write_temporary(dir / name, text), dir / name);
+  } catch (...) {
+    discard();
+    throw;
+  }
+  for (std::size_t i = 0; i < staged.size(); ++i) {
+    try {
+      util::commit_temporary(staged[i].first, staged[i].second);
+    } catch (...) {
+      staged.erase(staged.begin(), staged.begin() + static_cast<std::ptrdiff_t>(i + 1));
+      discard();
+      throw;
+    }
+  }
+}
+
 }  // namespace
 
 void LoadOptions::check() const {
@@ -118,12 +153,13 @@ ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
 
   const fs::path names_path = dir / "filenames.txt";
   const auto names = read_text_lines(names_path);
+  check_listed_names(names_path, names);
   for (const auto& name : names) {
     const fs::path relative(name.text);
     if (relative.is_absolute() ||
         std::any_of(relative.begin(), relative.end(), [](const fs::path& part) { return part == ".."; })) {
       fail("{}:{}: '{}' must name a file inside the stack folder", names_path.string(), name.number,
-           name.text);
+           printable(name.text));
     }
   }
   if (static_cast<int>(names.size()) < options.min_images) {
@@ -165,9 +201,19 @@ ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
     frame.light_direction = directions[i].value.normalized();
     if (!intensities.empty()) frame.light_intensity = intensities[i].value;
   }
+  const fs::path manifest_path = dir / "manifest.json";
+  const bool use_manifest = options.read_manifest && file_exists(manifest_path);
+  std::vector<std::string> files;
+  for (const auto& frame : stack.frames) files.push_back(frame.filename);
+  const nlohmann::json manifest = use_manifest ? read_manifest_json(manifest_path) : nlohmann::json();
+  const ImageHeader declared = check_frame_headers(
+      dir, files, use_manifest ? manifest_image_size(manifest_path, manifest) : std::nullopt, manifest_path);
   parallel_chunks(names.size(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i)
-      stack.frames[i].image = read_image(dir / stack.frames[i].filename);
+    for (std::size_t i = begin; i < end; ++i) {
+      const fs::path path = dir / stack.frames[i].filename;
+      stack.frames[i].image = read_image(path);
+      check_finite_pixels(path, stack.frames[i].image);
+    }
   });
   const cv::Mat& first = stack.frames.front().image;
   const fs::path first_path = dir / stack.frames.front().filename;
@@ -185,6 +231,7 @@ ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
 
   const fs::path mask_path = dir / "mask.png";
   if (file_exists(mask_path)) {
+    check_declared_size(mask_path, declared, "mask");
     stack.mask = read_mask(mask_path);
     if (stack.mask.size() != first.size()) {
       fail("{}: mask is {}, images are {} (e.g. {})", mask_path.string(), size_text(stack.mask),
@@ -197,6 +244,7 @@ ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
     const fs::path depth_path = dir / "depth_gt.pfm";
     GroundTruth truth;
     if (file_exists(normals_path)) {
+      check_declared_size(normals_path, declared, "ground truth");
       auto decoded = read_normal_map(normals_path);
       if (decoded.normals.size() != first.size()) {
         fail("{}: ground truth is {}, images are {}", normals_path.string(), size_text(decoded.normals),
@@ -214,10 +262,9 @@ ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
     if (!truth.normals.empty() || !truth.depth.empty()) stack.ground_truth = std::move(truth);
   }
 
-  const fs::path manifest_path = dir / "manifest.json";
-  if (options.read_manifest && file_exists(manifest_path)) {
-    apply_manifest(manifest_path, stack);
-    load_darks(dir, manifest_path, stack);
+  if (use_manifest) {
+    apply_manifest(manifest_path, manifest, stack);
+    load_darks(dir, manifest_path, declared, stack);
   }
   return stack;
 }
@@ -282,11 +329,6 @@ void write_stack(const fs::path& dir, const ImageStack& stack, const nlohmann::j
       write_png(dir / file, dark);
     }
   }
-  std::string names;
-  for (const auto& name : files.frames) names += name + "\n";
-  util::write_text_atomic(dir / "filenames.txt", names);
-  util::write_text_atomic(dir / "light_directions.txt", vec3_lines(stack.frames, true));
-  util::write_text_atomic(dir / "light_intensities.txt", vec3_lines(stack.frames, false));
   if (!files.mask.empty()) {
     cv::Mat binary;
     cv::compare(stack.mask, 0, binary, cv::CMP_GT);
@@ -294,7 +336,19 @@ void write_stack(const fs::path& dir, const ImageStack& stack, const nlohmann::j
   }
   if (!files.normals.empty()) write_normal_map(dir / files.normals, stack.ground_truth->normals, stack.mask);
   if (!files.depth.empty()) write_pfm(dir / files.depth, stack.ground_truth->depth);
-  util::write_text_atomic(dir / "manifest.json", manifest.dump(2) + "\n");
+  std::string names;
+  for (const auto& name : files.frames) names += name + "\n";
+  write_index_files(dir, {{"filenames.txt", names},
+                          {"light_directions.txt", vec3_lines(stack.frames, true)},
+                          {"light_intensities.txt", vec3_lines(stack.frames, false)},
+                          {"manifest.json", manifest.dump(2) + "\n"}});
+}
+
+void write_empty_stack(const fs::path& dir, const nlohmann::json& manifest) {
+  write_index_files(dir, {{"filenames.txt", ""},
+                          {"light_directions.txt", ""},
+                          {"light_intensities.txt", ""},
+                          {"manifest.json", manifest.dump(2) + "\n"}});
 }
 
 }  // namespace lightstage::io

@@ -1,12 +1,14 @@
 #include "io/stack_manifest.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/printable.hpp"
 #include "lightstage/common/version.hpp"
 #include "util/utc_time.hpp"
 
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <iterator>
 #include <string>
@@ -26,7 +28,7 @@ double number_field(const json& entry, const char* key, double fallback, const s
   const auto it = entry.find(key);
   if (it == entry.end() || it->is_null()) return fallback;
   if (!it->is_number())
-    fail("{}: frames[{}].{}: expected a number, got {}", path.string(), index, key, it->dump());
+    fail("{}: frames[{}].{}: expected a number, got {}", path.string(), index, key, printable(it->dump()));
   const double value = it->get<double>();
   if (!std::isfinite(value)) fail("{}: frames[{}].{}: not a finite number", path.string(), index, key);
   return value;
@@ -47,19 +49,21 @@ const char* const kFrameKeys[] = {"index",
 
 // A file name from the manifest that must stay inside the stack folder.
 std::string folder_file(const json& value, const std::string& field, const std::filesystem::path& path) {
-  if (!value.is_string()) fail("{}: {}: expected a file name, got {}", path.string(), field, value.dump());
+  if (!value.is_string())
+    fail("{}: {}: expected a file name, got {}", path.string(), field, printable(value.dump()));
   const std::string name = value.get<std::string>();
   const std::filesystem::path relative(name);
   if (name.empty() || relative.is_absolute() ||
       std::any_of(relative.begin(), relative.end(),
                   [](const std::filesystem::path& part) { return part == ".."; })) {
-    fail("{}: {}: '{}' must name a file inside the stack folder", path.string(), field, name);
+    fail("{}: {}: '{}' must name a file inside the stack folder", path.string(), field, printable(name));
   }
   return name;
 }
 
 double number_value(const json& value, const std::string& field, const std::filesystem::path& path) {
-  if (!value.is_number()) fail("{}: {}: expected a number, got {}", path.string(), field, value.dump());
+  if (!value.is_number())
+    fail("{}: {}: expected a number, got {}", path.string(), field, printable(value.dump()));
   const double number = value.get<double>();
   if (!std::isfinite(number)) fail("{}: {}: not a finite number", path.string(), field);
   return number;
@@ -67,14 +71,14 @@ double number_value(const json& value, const std::string& field, const std::file
 
 int integer_field(const json& value, const std::string& field, const std::filesystem::path& path) {
   if (!value.is_number_integer())
-    fail("{}: {}: expected an integer, got {}", path.string(), field, value.dump());
+    fail("{}: {}: expected an integer, got {}", path.string(), field, printable(value.dump()));
   return value.get<int>();
 }
 
 std::vector<double> numbers_field(const json& value, const std::string& field,
                                   const std::filesystem::path& path) {
   if (!value.is_array())
-    fail("{}: {}: expected an array of numbers, got {}", path.string(), field, value.dump());
+    fail("{}: {}: expected an array of numbers, got {}", path.string(), field, printable(value.dump()));
   std::vector<double> numbers;
   for (std::size_t k = 0; k < value.size(); ++k)
     numbers.push_back(number_value(value[k], fmt::format("{}[{}]", field, k), path));
@@ -103,45 +107,20 @@ double number_key(const std::string& key, const std::string& field, const std::f
   return number;
 }
 
-// Parsed, an object, and of our format and a version this build reads.
-json read_manifest_json(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) fail("{}: cannot open for reading", path.string());
-  json manifest;
-  try {
-    manifest = json::parse(in);
-  } catch (const json::exception& e) {
-    fail("{}: not valid JSON: {}", path.string(), e.what());
-  }
-  if (!manifest.is_object()) fail("{}: expected a JSON object at the top level", path.string());
-  if (const auto format = manifest.find("format"); format != manifest.end()) {
-    if (!format->is_string() || format->get<std::string>() != kStackFormat) {
-      fail("{}: format: expected \"{}\", got {}", path.string(), kStackFormat, format->dump());
-    }
-  }
-  if (const auto version = manifest.find("version"); version != manifest.end()) {
-    if (!version->is_number_integer() || version->get<int>() < 1 ||
-        version->get<int>() > kStackFormatVersion) {
-      fail("{}: version: unsupported value {} (this build reads 1..{})", path.string(), version->dump(),
-           kStackFormatVersion);
-    }
-  }
-  return manifest;
-}
-
 // The fields of frame entry `i` that load_stack and resume read alike: LED id
 // and position, exposure, gain, levels and the dark frame's file.
 void read_frame_fields(const json& entry, Frame& frame, const std::filesystem::path& path, std::size_t i) {
   if (const auto led = entry.find("led_id"); led != entry.end() && !led->is_null()) {
     if (!led->is_number_integer()) {
-      fail("{}: frames[{}].led_id: expected an integer, got {}", path.string(), i, led->dump());
+      fail("{}: frames[{}].led_id: expected an integer, got {}", path.string(), i, printable(led->dump()));
     }
     frame.led_id = led->get<int>();
   }
   if (const auto position = entry.find("led_position_mm"); position != entry.end() && !position->is_null()) {
     if (!position->is_array() || position->size() != 3 || !(*position)[0].is_number() ||
         !(*position)[1].is_number() || !(*position)[2].is_number()) {
-      fail("{}: frames[{}].led_position_mm: expected [x, y, z], got {}", path.string(), i, position->dump());
+      fail("{}: frames[{}].led_position_mm: expected [x, y, z], got {}", path.string(), i,
+           printable(position->dump()));
     }
     frame.led_position_mm =
         Vec3((*position)[0].get<double>(), (*position)[1].get<double>(), (*position)[2].get<double>());
@@ -161,6 +140,31 @@ void read_frame_fields(const json& entry, Frame& frame, const std::filesystem::p
 }
 
 }  // namespace
+
+json read_manifest_json(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) fail("{}: cannot open for reading", path.string());
+  json manifest;
+  try {
+    manifest = json::parse(in);
+  } catch (const json::exception& e) {
+    fail("{}: not valid JSON: {}", path.string(), printable(e.what(), 4 * kPrintableChars));
+  }
+  if (!manifest.is_object()) fail("{}: expected a JSON object at the top level", path.string());
+  if (const auto format = manifest.find("format"); format != manifest.end()) {
+    if (!format->is_string() || format->get<std::string>() != kStackFormat) {
+      fail("{}: format: expected \"{}\", got {}", path.string(), kStackFormat, printable(format->dump()));
+    }
+  }
+  if (const auto version = manifest.find("version"); version != manifest.end()) {
+    if (!version->is_number_integer() || version->get<int>() < 1 ||
+        version->get<int>() > kStackFormatVersion) {
+      fail("{}: version: unsupported value {} (this build reads 1..{})", path.string(),
+           printable(version->dump()), kStackFormatVersion);
+    }
+  }
+  return manifest;
+}
 
 json build_manifest(const ImageStack& stack, const StackFiles& files, const json& extra) {
   if (!extra.is_object()) fail("extra_manifest: expected a JSON object, got {}", extra.type_name());
@@ -217,8 +221,24 @@ json build_manifest(const ImageStack& stack, const StackFiles& files, const json
   return manifest;
 }
 
+std::optional<cv::Size> manifest_image_size(const std::filesystem::path& path, const json& manifest) {
+  const auto width = manifest.find("width");
+  const auto height = manifest.find("height");
+  if (width == manifest.end() || height == manifest.end()) return std::nullopt;
+  for (const auto& [key, value] : {std::pair{"width", width}, std::pair{"height", height}}) {
+    if (!value->is_number_integer() || value->get<std::int64_t>() <= 0 ||
+        value->get<std::int64_t>() > 1 << 30) {
+      fail("{}: {}: expected a positive image size, got {}", path.string(), key, printable(value->dump()));
+    }
+  }
+  return cv::Size(width->get<int>(), height->get<int>());
+}
+
 void apply_manifest(const std::filesystem::path& path, ImageStack& stack) {
-  const json manifest = read_manifest_json(path);
+  apply_manifest(path, read_manifest_json(path), stack);
+}
+
+void apply_manifest(const std::filesystem::path& path, const json& manifest, ImageStack& stack) {
   const auto frames = manifest.find("frames");
   if (frames == manifest.end()) return;
   if (!frames->is_array()) fail("{}: frames: expected an array, got {}", path.string(), frames->type_name());
@@ -233,8 +253,8 @@ void apply_manifest(const std::filesystem::path& path, ImageStack& stack) {
       fail("{}: frames[{}]: expected an object, got {}", path.string(), i, entry.type_name());
     if (const auto file = entry.find("file"); file != entry.end()) {
       if (!file->is_string() || file->get<std::string>() != frame.filename) {
-        fail("{}: frames[{}].file: {} does not match '{}' from filenames.txt", path.string(), i, file->dump(),
-             frame.filename);
+        fail("{}: frames[{}].file: {} does not match '{}' from filenames.txt", path.string(), i,
+             printable(file->dump()), printable(frame.filename));
       }
     }
     read_frame_fields(entry, frame, path, i);
@@ -255,7 +275,7 @@ CaptureManifest read_capture_manifest(const std::filesystem::path& path) {
   const auto version = c.find("version");
   if (version == c.end() || !version->is_number_integer() || version->get<int>() != kCaptureFormatVersion) {
     fail("{}: capture.version {} is not {}", path.string(),
-         version == c.end() ? "(missing)" : version->dump(), kCaptureFormatVersion);
+         version == c.end() ? "(missing)" : printable(version->dump()), kCaptureFormatVersion);
   }
   CaptureManifest out;
   const json& plan = field("plan_led_ids");
@@ -285,6 +305,12 @@ CaptureManifest read_capture_manifest(const std::filesystem::path& path) {
       const std::string name = fmt::format("capture.bracket_exposure_us.{}", id);
       out.bracket_exposure_us[led_id_key(id, name, path)] = numbers_field(list, name, path);
     }
+  }
+  if (const auto count = c.find("dark_frames"); count != c.end())
+    out.dark_frames = integer_field(*count, "capture.dark_frames", path);
+  if (const auto fixed = c.find("fixed_exposure_us"); fixed != c.end()) {
+    out.fixed_exposure = !fixed->is_null();
+    if (!fixed->is_null()) out.fixed_exposure_us = number_value(*fixed, "capture.fixed_exposure_us", path);
   }
   const json& darks = field("darks");
   if (!darks.is_object()) fail("{}: capture.darks: expected an object", path.string());

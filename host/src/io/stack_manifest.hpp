@@ -10,6 +10,7 @@
 
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,18 @@ nlohmann::json build_manifest(const ImageStack& stack, const StackFiles& files, 
 // and the field for bad JSON, a wrong format or version, a frame count or
 // file name that disagrees with filenames.txt, or a value of the wrong type.
 void apply_manifest(const std::filesystem::path& path, ImageStack& stack);
+// The same for a manifest already read (read_manifest_json).
+void apply_manifest(const std::filesystem::path& path, const nlohmann::json& manifest, ImageStack& stack);
+
+// Reads `path`: parsed, an object, of our format and a version this build
+// reads. Throws InputError naming the file.
+nlohmann::json read_manifest_json(const std::filesystem::path& path);
+
+// The image size the manifest read from `path` declares ("width" and
+// "height"), when it declares both; load_stack checks the images' headers
+// against it before decoding them. Throws InputError as apply_manifest does.
+std::optional<cv::Size> manifest_image_size(const std::filesystem::path& path,
+                                            const nlohmann::json& manifest);
 
 // The "capture" section a capture keeps in its manifest (docs/capture.md).
 inline constexpr int kCaptureFormatVersion = 1;
@@ -62,6 +75,10 @@ struct CaptureManifest {
   std::map<int, std::vector<double>> bracket_exposure_us;  // per LED id
   std::vector<CaptureDark> darks;
   std::vector<ManifestFrame> frames;
+  // What the run was asked for; unset in manifests written before they were recorded.
+  std::optional<int> dark_frames;           // capture.dark_frames: frames averaged per dark
+  std::optional<bool> fixed_exposure;       // capture.fixed_exposure_us present: null = automatic
+  std::optional<double> fixed_exposure_us;  // its value when fixed
 };
 
 // Reads a capture's manifest.json: the format and version checks of

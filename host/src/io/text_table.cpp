@@ -1,6 +1,7 @@
 #include "io/text_table.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/printable.hpp"
 
 #include <cctype>
 #include <charconv>
@@ -65,7 +66,8 @@ std::vector<Vec3Row> read_vec3_rows(const std::filesystem::path& path) {
       p = next;
     }
     if (malformed || count != 3) {
-      fail("{}:{}: expected three numbers 'a b c', got '{}'", path.string(), line.number, line.text);
+      fail("{}:{}: expected three numbers 'a b c', got '{}'", path.string(), line.number,
+           printable(line.text));
     }
     rows.push_back({line.number, value});
   }

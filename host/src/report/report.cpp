@@ -627,6 +627,9 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
 }
 
 ReportSummary write_report(const fs::path& result_dir, const fs::path& out, const ReportOptions& options) {
+  // Any other name could be one of the files the report reads (normal.png, summary.json, a frame).
+  if (!out.empty() && (out.extension() != ".html" || fs::is_directory(out)))
+    fail("--out {}: the report is one HTML file; name a new .html file", out.string());
   ReportSummary summary;
   const std::string html = render_report(result_dir, options, &summary);
   summary.file = out.empty() ? result_dir / "report.html" : out;

@@ -1,14 +1,38 @@
 #include "util/atomic_file.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/host/io/write_fault.hpp"
 
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <atomic>
-#include <fstream>
+#include <cerrno>
+#include <cstring>
+#include <mutex>
 #include <system_error>
 
 namespace lightstage::util {
+namespace {
+
+std::mutex fault_mutex;
+io::WriteFault installed_fault;
+
+int injected_errno(const std::filesystem::path& target) {
+  const std::lock_guard lock(fault_mutex);
+  return installed_fault ? installed_fault(target) : 0;
+}
+
+[[noreturn]] void fail_write(const std::filesystem::path& target, int error) {
+  if (error == ENOSPC || error == EDQUOT) {
+    // Not the path's fault: the capture can go on (--resume) once there is room.
+    throw Error(fmt::format("{}: cannot write: no space left on the device ({}); free some space",
+                            target.string(), error == ENOSPC ? "ENOSPC" : "EDQUOT"));
+  }
+  fail("{}: cannot write: {}", target.string(), std::strerror(error));
+}
+
+}  // namespace
 
 std::filesystem::path temporary_sibling(const std::filesystem::path& target) {
   static std::atomic<unsigned> counter{0};
@@ -26,20 +50,48 @@ void commit_temporary(const std::filesystem::path& temporary, const std::filesys
   }
 }
 
-void write_text_atomic(const std::filesystem::path& path, const std::string& text) {
-  const auto temporary = temporary_sibling(path);
-  {
-    std::ofstream out(temporary, std::ios::binary);
-    if (!out) fail("{}: cannot write: cannot create a file in this folder", path.string());
-    out << text;
-    out.flush();
-    if (!out) {
-      std::error_code ignored;
-      std::filesystem::remove(temporary, ignored);
-      fail("{}: cannot write: write error", path.string());
-    }
+std::filesystem::path write_temporary(const std::filesystem::path& target, std::string_view bytes) {
+  const std::filesystem::path temporary = temporary_sibling(target);
+  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+  if (fd < 0) {
+    const int error = errno;
+    if (error == ENOSPC || error == EDQUOT) fail_write(target, error);
+    fail("{}: cannot write: cannot create a file in this folder ({})", target.string(), std::strerror(error));
   }
-  commit_temporary(temporary, path);
+  int error = injected_errno(target);
+  for (std::size_t done = 0; error == 0 && done < bytes.size();) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0) {
+      if (errno != EINTR) error = errno;
+      continue;
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  if (::close(fd) != 0 && error == 0) error = errno;
+  if (error != 0) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    fail_write(target, error);
+  }
+  return temporary;
+}
+
+void write_text_atomic(const std::filesystem::path& path, std::string_view text) {
+  commit_temporary(write_temporary(path, text), path);
 }
 
 }  // namespace lightstage::util
+
+namespace lightstage::io {
+
+ScopedWriteFault::ScopedWriteFault(WriteFault fault) {
+  const std::lock_guard lock(util::fault_mutex);
+  util::installed_fault = std::move(fault);
+}
+
+ScopedWriteFault::~ScopedWriteFault() {
+  const std::lock_guard lock(util::fault_mutex);
+  util::installed_fault = nullptr;
+}
+
+}  // namespace lightstage::io

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 namespace lightstage::util {
 
@@ -16,7 +17,14 @@ std::filesystem::path temporary_sibling(const std::filesystem::path& target);
 // InputError naming `target`.
 void commit_temporary(const std::filesystem::path& temporary, const std::filesystem::path& target);
 
-// Writes `text` to `path` atomically; throws InputError naming `path`.
-void write_text_atomic(const std::filesystem::path& path, const std::string& text);
+// Writes `bytes` to a fresh temporary sibling of `target` (io/write_fault.hpp
+// may fail it) and returns its name; the caller commits or removes it. On
+// failure nothing is left behind and it throws, naming `target`: Error for a
+// full disk or quota ("no space left on the device", not the path's fault),
+// InputError otherwise (a folder that is missing or not writable).
+std::filesystem::path write_temporary(const std::filesystem::path& target, std::string_view bytes);
+
+// Writes `text` to `path` atomically; throws as write_temporary.
+void write_text_atomic(const std::filesystem::path& path, std::string_view text);
 
 }  // namespace lightstage::util

@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -40,8 +41,13 @@ class FrameDecoder {
   // of bad bytes as far as they are buffered); nullopt when more bytes are needed.
   // A frame still incomplete when a complete, CRC-valid frame starts after its
   // header is taken as cut short (a sender that died mid-frame) and dropped,
-  // so a stale partial frame cannot swallow the next session's messages.
+  // so a stale partial frame cannot swallow the next session's messages; so
+  // are any further cut-short frames between the two, however many.
   std::optional<Frame> next();
+  // Gives up on the incomplete frame at the front (its sender went quiet
+  // mid-frame) and resynchronises on the next magic after its start. A report
+  // naming how much of it had arrived; nullopt when nothing was buffered.
+  std::optional<Frame> abandon_partial();
   std::size_t buffered() const { return buffer_.size() - start_; }
 
  private:
@@ -50,11 +56,22 @@ class FrameDecoder {
   // Offset (from start_) of a complete, CRC-valid frame after the frame start at start_.
   std::optional<std::size_t> later_complete_frame();
 
+  // A later frame start whose bytes have not all arrived yet: looked at again
+  // (its CRC checked once) when the buffer reaches its end.
+  struct PendingCandidate {
+    std::size_t end = 0;  // offset from start_ one past its CRC
+    std::size_t at = 0;   // offset from start_ of its magic
+    bool operator>(const PendingCandidate& other) const { return end > other.end; }
+  };
+
   std::vector<std::uint8_t> buffer_;
   std::size_t start_ = 0;
-  // Offset from start_ below which later_complete_frame() has nothing left to
-  // find, so bytes of a long frame arriving piecewise are examined once.
+  // Offset from start_ below which later_complete_frame() has scanned: every
+  // candidate before it is rejected or waits in pending_, so bytes of a long
+  // frame arriving piecewise are examined once.
   std::size_t lookahead_ = 0;
+  // Min-heap on `end`.
+  std::vector<PendingCandidate> pending_;
 };
 
 }  // namespace lightstage::protocol

@@ -14,6 +14,10 @@
 
 namespace lightstage {
 
+// The longest duration any rig field may give (one hour): far beyond any LED
+// limit or exposure, and far inside the nanosecond clocks' int64 range.
+inline constexpr double kMaxRigDurationUs = 3'600'000'000.0;
+
 // A GPIO line, by offset on its chip or by the name the board gives it.
 struct LineRef {
   std::string name;  // empty when referenced by offset

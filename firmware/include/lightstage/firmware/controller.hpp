@@ -38,8 +38,17 @@ struct ControllerOptions {
   int realtime_priority = 80;
   bool memory_locked = false;  // main() called lock_memory() successfully
   std::size_t max_sequences = 64;
+  // Stored sequences together, as serialized: a bound on what hosts can make
+  // the controller keep (sequences are also dropped when their host's
+  // session ends: forget_sequences()).
+  std::size_t max_sequence_bytes = 4u << 20;
   // A static LED needs at least this much on-time budget left to be lit.
   double min_hold_us = 1000;
+  // A static LED is switched off this long before its limit (at most half its
+  // budget), so that a late wake-up on a loaded machine does not overshoot
+  // the limit. 0 here (tests on a virtual clock see the exact limit);
+  // lightstage-domed sets it from --cutoff-margin-us.
+  double cutoff_margin_us = 0;
 };
 
 class Controller {
@@ -67,8 +76,13 @@ class Controller {
   // `why` in its SequenceDone; lit static LEDs are reported in a Fault unless
   // the host asked (ABORTED_BY_HOST). Safety stops leave the status at FAULT.
   void stop(proto::Outcome why, const std::string& detail);
-  // A new command clears FAULT.
+  // A new command clears FAULT (not a lost GPIO backend: that stays).
   void clear_fault();
+  // Drops every uploaded sequence (the host that sent them is gone).
+  void forget_sequences();
+  // Why the GPIO backend failed, once it has: from then on every command is
+  // refused with GPIO_ERROR, Status stays FAULT, and lightstage-domed exits.
+  std::optional<std::string> gpio_failure() const;
 
   proto::Status status() const;
   // LEDs lit or a sequence running: what the watchdog guards.
@@ -94,6 +108,8 @@ class Controller {
   void send(const proto::ControllerMessage& message);
   void note_leds(std::uint32_t step, std::span<const int> leds_on);
   void fault(proto::Outcome why, const std::string& detail, const std::vector<int>& leds);
+  void note_gpio_failure(const std::string& what);
+  std::optional<Refusal> refuse_if_gpio_failed() const;
 
   const Rig& rig_;
   DomeIo io_;
@@ -104,7 +120,8 @@ class Controller {
   bool realtime_ = false;
 
   std::map<std::uint32_t, proto::Sequence> sequences_;
-  std::map<int, HeldLed> held_;  // static LEDs lit now; see threading above
+  std::size_t sequence_bytes_ = 0;  // serialized size of sequences_
+  std::map<int, HeldLed> held_;     // static LEDs lit now; see threading above
 
   std::thread worker_;
   StopFlag stop_;
@@ -113,6 +130,7 @@ class Controller {
 
   mutable std::mutex status_mutex_;
   proto::Status status_;
+  std::optional<std::string> gpio_failure_;  // under status_mutex_
 
   std::mutex sink_mutex_;
   Sink sink_;

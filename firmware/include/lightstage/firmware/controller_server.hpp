@@ -11,11 +11,23 @@
 // - A malformed frame or payload is answered with Error{MALFORMED_FRAME} and
 //   the connection keeps being served.
 // - One controlling client at a time: a connection arriving while one is
-//   served gets Error{BUSY} and is closed.
+//   served gets Error{BUSY} (naming the host in control and since when) and
+//   is closed.
+// - A valid message is a CRC-checked frame holding a HostMessage with a body;
+//   garbage, damaged frames and empty messages are answered but prove nothing.
 // - Watchdog: while LEDs are lit or a sequence runs, a gap of more than the
-//   negotiated timeout between messages from the host aborts everything and
-//   darkens the dome (WATCHDOG). A lost link does the same (LINK_LOST), and so
-//   does leaving serve() (SHUTDOWN).
+//   negotiated timeout between valid messages from the host aborts everything
+//   and darkens the dome (WATCHDOG). A lost link does the same (LINK_LOST),
+//   and so does leaving serve() (SHUTDOWN).
+// - Lease: a connection that has not negotiated within hello_timeout, or a
+//   negotiated host that sends no valid message for idle_lease (at least its
+//   watchdog timeout), gets Error{SESSION_EXPIRED}, the dome goes dark and
+//   the connection is closed, so that a silent or trickling peer cannot hold
+//   the one-host lock. The hello timeout applies to a connection that has
+//   sent something, or that another host has been refused for: a serial line
+//   or USB function with no host on it stays open quietly.
+// - A failed GPIO backend ends serving: the host is told (Fault, Status
+//   FAULT) and serve() returns; lightstage-domed then exits non-zero.
 
 #include "lightstage/common/link.hpp"
 #include "lightstage/common/message_channel.hpp"
@@ -38,6 +50,8 @@ struct ServerOptions {
   std::uint32_t min_watchdog_ms = 20;
   std::uint32_t max_watchdog_ms = 60'000;
   std::string gpio_uri;  // reported in Info
+  std::chrono::milliseconds hello_timeout{5000};
+  std::chrono::milliseconds idle_lease{30'000};
 };
 
 class ControllerServer {
@@ -58,17 +72,24 @@ class ControllerServer {
 
  private:
   struct Session {
+    std::string peer;
     bool negotiated = false;
+    bool contested = false;  // another host was refused while this one held the dome
     std::uint32_t version = 0;
     std::uint32_t watchdog_ms = 0;
-    std::chrono::steady_clock::time_point last_message;
+    std::chrono::steady_clock::time_point connected;
+    std::chrono::system_clock::time_point connected_wall;  // for BUSY: since when
+    std::chrono::steady_clock::time_point last_message;    // the last valid one
   };
 
   // The reply to `request`; nullopt when none is due (heartbeat without id, or already sent).
   std::optional<proto::ControllerMessage> handle(const proto::HostMessage& request, Session& session,
                                                  MessageChannel& channel);
   proto::ControllerMessage info(const Session& session) const;
-  void refuse_extra_client(LinkListener& listener);
+  void refuse_extra_client(LinkListener& listener, Session& holder);
+  // Why the session has run out (no Hello in time, idle past its lease), or nullopt.
+  std::optional<std::string> expired(const Session& session, const MessageChannel& channel,
+                                     std::chrono::steady_clock::time_point now) const;
 
   Controller& controller_;
   ServerOptions options_;

@@ -54,6 +54,10 @@ namespace lightstage::firmware {
 class Sequencer {
  public:
   static constexpr std::uint32_t kMaxSteps = 10'000;
+  // How far ahead of the controller's clock a run may be scheduled: a host
+  // synchronising a start asks for milliseconds, and any bound keeps the
+  // step times (start + durations) inside int64 nanoseconds.
+  static constexpr std::int64_t kMaxStartAheadNs = 60'000'000'000;
   // How often a wait wakes to look at the stop flag (abort, watchdog, signal).
   static constexpr std::int64_t kStopPollNs = 2'000'000;
 

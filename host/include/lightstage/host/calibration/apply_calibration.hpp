@@ -1,7 +1,8 @@
 #pragma once
 // One calibration, many captures: `lightstage solve --calibration FILE`
-// replaces a stack's light directions with calibrated ones (and scales its
-// light intensities by the calibrated relative intensities), and — when the
+// replaces a stack's light directions with calibrated ones and, when the
+// calibration measured them, its relative light intensities (the stack's
+// overall scale and each frame's exposure × gain are kept), and — when the
 // calibration holds LED positions — gives the solver near lights: per pixel,
 // the direction to each LED and its 1/d² falloff, with the surface first
 // taken as the plane through the object position.
@@ -27,6 +28,7 @@ struct StackCalibration {
   std::vector<std::size_t> light_of_frame;     // per frame, its light in calibration.lights
   std::string matched_by;                      // "led_id", "filename" or "order"
   std::optional<CameraGeometry> stack_camera;  // the stack's own (manifest), when it records one
+  bool intensities_replaced = false;           // the calibration measured intensities
 
   nlohmann::json describe() const;
 };

@@ -48,6 +48,24 @@ std::vector<int> plan_led_ids(const Rig& rig, const std::vector<int>& requested)
 // margin included) and the camera allows.
 double longest_exposure_us(const Led& led, const camera::ControlInfo& range, std::uint32_t settle_us);
 
+// How long a step lights its LED after the settle time, open loop: the
+// exposure with room for the camera's trigger latency.
+std::uint32_t open_loop_on_us(double exposure_us);
+
+// Closed loop: how long a step waits for the camera's strobe (its LED lit
+// meanwhile): the exposure plus room for a late camera, but when an LED is lit
+// (max_on_us > 0) no longer than its on-time limit leaves after `settle_us`.
+std::uint32_t strobe_timeout_us(double exposure_us, double max_on_us, std::uint32_t settle_us);
+
+// Every LED's on-time limit by id (0 = none known).
+using OnTimeLimits = std::map<int, double>;
+
+// Throws InputError naming the LED, exposure and limit when a planned shot
+// (a frame's exposure or one of its bracket's) would light its LED for
+// longer than its limit allows: checked before anything is taken, so the
+// controller does not refuse a sequence half-way through a capture.
+void check_on_time(const CapturePlan& plan, const OnTimeLimits& max_on_us, std::uint32_t settle_us);
+
 // Takes one frame of each LED at one exposure, in the order given.
 using PreviewFrames =
     std::function<std::vector<camera::Frame>(const std::vector<int>& led_ids, double exposure_us)>;

@@ -14,6 +14,8 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <string>
+#include <utility>
 #include <vector>
 
 namespace lightstage {
@@ -35,6 +37,16 @@ struct Batch {
   std::size_t duplicates = 0;
   std::size_t retakes = 0;
   double camera_wait_seconds = 0;
+};
+
+// The controller ended a batch's sequence early (its watchdog, a safety limit,
+// a shutdown): the message says how; `partial` holds the shots exposed in full
+// before it, with their frames, so they are kept rather than taken again.
+class BatchAborted : public Error {
+ public:
+  BatchAborted(const std::string& message, Batch taken_so_far)
+      : Error(message), partial(std::move(taken_so_far)) {}
+  Batch partial;
 };
 
 // One camera frame of a planned frame: at the plan's exposure `exposure` (an index into exposures_us).
@@ -65,10 +77,12 @@ class CaptureRunner {
   double gain() const { return gain_; }  // in force after start()
   // Shots per controller sequence: short, so an interruption loses little.
   std::size_t steps_per_sequence() const;
+  // Each LED's on-time limit: the rig's, or the controller's where it is tighter.
+  OnTimeLimits on_time_limits(const Rig& rig) const;
 
   // The shots (all at one exposure) with dropped ones retaken up to
   // max_retakes times; throws Error naming the camera and LED when a shot
-  // still has no frame.
+  // still has no frame, BatchAborted when the controller ends a sequence early.
   Batch run_batch(const std::vector<Shot>& shots);
 
   // Called with a planned frame's takes once all are in (shortest exposure first).
@@ -78,12 +92,15 @@ class CaptureRunner {
   // sequences; each frame is handed on as its batch ends. With a bracket:
   // LEDs grouped by base exposure and cut into sequences; each group is taken
   // at each of its bracket exposures (one batch each, shortest first), then
-  // handed on frame by frame. Adds to stats().
+  // handed on frame by frame. Adds to stats(). When the controller aborts a
+  // batch, the frames complete by then are handed on before BatchAborted is
+  // rethrown.
   void take_frames(const CapturePlan& plan, const std::vector<bool>& done, const FrameSink& on_frame);
   const RunStats& stats() const { return stats_; }
 
  private:
   void set_exposure(double exposure_us);
+  double max_on_us(int led_id) const;  // as the controller reports it; 0 = unknown
   Batch run_batch_once(const std::vector<Shot>& shots);
   Batch run_software_batch(const std::vector<Shot>& shots);
   Batch run_counted(const std::vector<Shot>& shots);

@@ -36,8 +36,19 @@ class InverseResponse {
   std::vector<double> knots_;
 };
 
+// The default brackets around the rig camera's exposure `reference_us`. To
+// fit a response: 8 exposures doubling from 1/16 of it, so every value from
+// dark to clipped is seen. To check linearity: 5 exposures half a stop apart
+// from half to twice it, so many pixels stay well inside the range in every
+// frame (check_linearity uses only those).
+std::vector<double> response_bracket_us(double reference_us);
+std::vector<double> linearity_bracket_us(double reference_us);
+
 // From frames of one still scene at several exposures (µs), all of `bits`-bit
 // data. Throws InputError when fewer than 3 exposures or they do not differ.
+// The ends of the curve, where few values are seen and the fit is loosely
+// held, follow the power law of its well-determined middle: it reaches 0 at 0
+// and does not flatten below full scale.
 InverseResponse calibrate_response(const std::vector<cv::Mat>& images,
                                    const std::vector<double>& exposures_us, int bits);
 

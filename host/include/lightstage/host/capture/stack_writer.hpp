@@ -40,6 +40,7 @@ struct CaptureSetup {
   camera::CameraInfo camera;
   std::string controller_firmware;
   std::string controller_rig;
+  std::optional<double> fixed_exposure_us;  // --exposure-us; unset = automatic
 };
 
 class CaptureStackWriter {
@@ -48,10 +49,11 @@ class CaptureStackWriter {
   CaptureStackWriter(const Rig& rig, std::filesystem::path out, const InverseResponse* response);
 
   // --resume: reads out/manifest.json when there is one, checks it was planned
-  // for `led_ids` with `bracket_stops`, and keeps the frames it lists (their
-  // images read back) and its darks. Returns the exposures it planned.
+  // for `led_ids` with the options' bracket stops, fixed or automatic
+  // exposure (--exposure-us) and dark frames, and keeps the frames it lists
+  // (their images read back) and its darks. Returns the exposures it planned.
   // Throws InputError naming the manifest and what does not fit.
-  PreviousPlan resume(const std::vector<int>& led_ids, const std::vector<double>& bracket_stops);
+  PreviousPlan resume(const std::vector<int>& led_ids, const CaptureOptions& asked);
 
   // The plan the frames are added by; call before anything below. Darks the
   // resumed manifest lists are matched to the plan's exposures.

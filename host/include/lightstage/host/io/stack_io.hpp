@@ -16,9 +16,17 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstddef>
+#include <cstdint>
 #include <filesystem>
 
 namespace lightstage::io {
+
+// What load_stack reads at most, checked before any image is decoded
+// (docs/stack-format.md): images listed in filenames.txt, and pixels on either
+// side of an image as its header declares them.
+inline constexpr std::size_t kMaxStackImages = 10'000;
+inline constexpr std::int64_t kMaxImageSide = 16'384;
 
 struct LoadOptions {
   // Fewer listed images than this is an error (the Lambertian solver needs 3).
@@ -40,7 +48,10 @@ struct LoadOptions {
 // different size or type, fewer than min_images images, direction or
 // intensity files with the wrong number of lines or malformed numbers, a
 // zero-length direction, a non-positive intensity, a mask, ground truth,
-// dark frame or manifest that does not fit the images. Dark frames named by
+// dark frame or manifest that does not fit the images, more than
+// kMaxStackImages images or one listed twice, an image that is not PNG or PFM
+// or declares a side over kMaxImageSide (both checked from the headers before
+// decoding), a float image holding NaN or infinity. Dark frames named by
 // the manifest are read once each and shared by the frames naming them.
 ImageStack load_stack(const std::filesystem::path& dir, const LoadOptions& options = {});
 
@@ -51,10 +62,17 @@ ImageStack load_stack(const std::filesystem::path& dir, const LoadOptions& optio
 // Frame::dark under its Frame::dark_file (once per name); manifest.json last. Keys of
 // `extra_manifest` (an object: rig, scene, sensor, ...) are added at the top
 // level; an "extra_manifest.frames" array of objects, one per frame, is merged
-// into the frame entries. Every file is written atomically. With
+// into the frame entries. Every file is written atomically, and the index
+// (filenames.txt, the light files, manifest.json) only once all of it is on
+// disk, so a failed write leaves the previous index whole. With
 // `write_images` false the frame images are taken to be on disk already (a
 // capture writes each as it lands) and only the other files are rewritten.
 void write_stack(const std::filesystem::path& dir, const ImageStack& stack,
                  const nlohmann::json& extra_manifest = nlohmann::json::object(), bool write_images = true);
+
+// The index of a stack that has no frames yet (a capture before its first
+// one): empty filenames.txt and light files with `manifest`, written as
+// write_stack writes its index.
+void write_empty_stack(const std::filesystem::path& dir, const nlohmann::json& manifest);
 
 }  // namespace lightstage::io

@@ -63,6 +63,8 @@ std::string render_report(const std::filesystem::path& result_dir, const ReportO
                           ReportSummary* summary = nullptr);
 
 // render_report, written atomically to `out` (default RESULT_DIR/report.html).
+// Throws InputError for an `out` that is not a .html file name (so it cannot
+// be one of the report's inputs).
 ReportSummary write_report(const std::filesystem::path& result_dir, const std::filesystem::path& out = {},
                            const ReportOptions& options = {});
 

@@ -20,8 +20,13 @@ struct DomeConnection {
   std::unique_ptr<camera::Camera> camera;
 };
 
+// Throws InputError naming `rig_path` when the controller's Info names another
+// rig, or the same name with another content fingerprint (rig_fingerprint.hpp).
+void check_same_rig(const Rig& rig, const std::filesystem::path& rig_path, const proto::Info& info);
+
 // Registers the camera backends (once), opens the camera, connects to the
-// controller. Throws InputError naming --rig when the controller runs another rig.
+// controller. Throws InputError naming --rig when the controller runs another rig
+// (check_same_rig).
 DomeConnection connect_dome(const std::filesystem::path& rig_path, const std::string& controller_uri,
                             const std::string& camera_uri);
 

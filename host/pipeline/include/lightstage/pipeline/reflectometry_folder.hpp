@@ -17,6 +17,7 @@ struct ReflectometrySettings {
   std::filesystem::path normals;  // a normal map; empty = the stack's Normal_gt.png
   SampleOptions samples;
   bool clamp_to_one = true;
+  std::filesystem::path out;  // folder for reflectance.json; empty = nothing written
 };
 
 struct ReflectometryReport {
@@ -25,7 +26,9 @@ struct ReflectometryReport {
   nlohmann::json json;  // what reflectance.json holds
 };
 
-// Throws InputError naming --normals when the stack has no ground truth and none is given.
+// Writes out/reflectance.json when `out` is set. Throws InputError naming
+// --normals when the stack has no ground truth and none is given, --out when
+// it is the stack folder or inside it.
 ReflectometryReport fit_stack_reflectance(const ReflectometrySettings& settings);
 
 }  // namespace lightstage::pipeline

@@ -14,9 +14,12 @@ namespace lightstage::pipeline {
 
 // Simulates the rig in `rig_path` under `options` and writes the stack into
 // `out`. Returns a JSON summary of what was written. `on_frames` (optional)
-// hears of every frame rendered (sim::simulate_stack).
+// hears of every frame rendered (sim::simulate_stack). Throws InputError,
+// before rendering, when `out` exists and is not empty, unless `overwrite`
+// (--force): then the files it writes replace theirs, and nothing else is removed.
 nlohmann::json simulate_to_folder(const std::filesystem::path& rig_path, const sim::SimulateOptions& options,
-                                  const std::filesystem::path& out, const sim::FrameProgress& on_frames = {});
+                                  const std::filesystem::path& out, const sim::FrameProgress& on_frames = {},
+                                  bool overwrite = false);
 
 // Natural lighting instead of the dome's LEDs (sim/natural_capture.hpp), for
 // `solve --method shape-prior`.
@@ -29,10 +32,10 @@ struct NaturalSimulation {
 
 // Renders the scene under natural lighting and writes the stack, a degraded
 // depth prior and, for a pinhole camera, its intrinsics (K.txt). The summary
-// names them under "shape_prior_flags".
+// names them under "shape_prior_flags". `out` as for simulate_to_folder.
 nlohmann::json simulate_natural_to_folder(const std::filesystem::path& rig_path,
                                           const sim::SimulateOptions& options,
                                           const NaturalSimulation& natural, const std::filesystem::path& out,
-                                          const sim::FrameProgress& on_frames = {});
+                                          const sim::FrameProgress& on_frames = {}, bool overwrite = false);
 
 }  // namespace lightstage::pipeline

@@ -6,6 +6,7 @@
 #include "lightstage/common/image_stack.hpp"
 #include "lightstage/host/eval/angular_error.hpp"
 #include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/shadow_threshold.hpp"
 #include "lightstage/host/solvers/solve_result.hpp"
 #include "lightstage/pipeline/solve_settings.hpp"
 
@@ -31,20 +32,25 @@ struct SolveCalibration {
 };
 
 // A stack folder made ready to solve: its observations (with the calibration
-// applied and, when it holds LED positions, near lights), the ground truth and
-// what the calibration changed.
+// applied and, when it holds LED positions, near lights), the shadow threshold
+// estimated from the stack (shadow_threshold.hpp), the ground truth and what
+// the calibration changed.
 struct SolveInput {
   Observations observations;
+  ShadowThreshold shadow;
   std::optional<GroundTruth> ground_truth;
   nlohmann::json calibration = nullptr;  // describe() of the applied calibration, with near_lights
 };
 SolveInput load_solve_input(const std::filesystem::path& input, const RadiometryOptions& radiometry,
                             const SolveCalibration& calibration = {});
 
-using SolverFunction = std::function<SolveResult(const Observations&)>;
+using SolverFunction = std::function<SolveResult(const SolveInput&)>;
 
 // Loads the stack in `input`, solves it with `solver` and writes the results
-// and report.html into `out`.
+// and report.html into `out`. Throws InputError when `out` is the input
+// folder or inside it (io/output_folder.hpp) and, naming the cause, when no
+// pixel was solved (SolveSummary::unusable_reason), before writing anything;
+// Error when the report fails.
 SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOptions& radiometry,
                          const SolverFunction& solver, const std::filesystem::path& out,
                          const SolveCalibration& calibration = {});
@@ -54,8 +60,8 @@ SolveReport solve_folder(const std::filesystem::path& input, const SolveSettings
                          const std::filesystem::path& out, const SolveCalibration& calibration = {});
 
 // Writes RESULT_DIR/report.html (report/report.hpp) for a solve of the stack
-// in `input`; a failure is logged as a warning, not thrown: a result without
-// a report is still a result.
+// in `input`. Throws Error naming report.html when it cannot be written (the
+// other results stay on disk; the command must still fail).
 void write_result_report(const std::filesystem::path& result_dir, const std::filesystem::path& input);
 
 }  // namespace lightstage::pipeline

@@ -6,6 +6,7 @@
 // its options in SolveSettings) and no caller changes.
 
 #include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/shadow_threshold.hpp"
 #include "lightstage/host/solvers/solve_result.hpp"
 #include "lightstage/pipeline/solve_settings.hpp"
 
@@ -34,7 +35,16 @@ const SolveMethod& find_solve_method(const std::string& name);
 // Throws InputError when the name is taken or empty.
 void register_solve_method(SolveMethod method);
 
-// Solves with settings.method (settings resolved: SolveSettings::resolve).
+// Solves with settings.method (settings resolved: SolveSettings::resolve),
+// with the checks of solve_checks.hpp around it: throws InputError for lights
+// of rank < 3, logs (and records under parameters.warnings) a method used
+// outside its assumptions, clamps normals facing away (facts
+// normals_facing_away). Without --shadow-threshold every method but l2 uses
+// `data_threshold`, estimated from the data; the threshold used is recorded
+// under parameters.shadow_threshold_choice.
+SolveResult solve_with(const Observations& observations, const SolveSettings& settings,
+                       const ShadowThreshold& data_threshold);
+// The same with the threshold estimated from the observations alone.
 SolveResult solve_with(const Observations& observations, const SolveSettings& settings);
 
 // What a solve's progress counts: pixels for the per-pixel methods (twice

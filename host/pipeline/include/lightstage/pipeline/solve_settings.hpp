@@ -52,6 +52,11 @@ struct SolveSettings {
   // chosen method's (a bad value fails before any input is read, naming its
   // flag). Throws InputError.
   void resolve();
+  // Without --shadow-threshold: the threshold estimated from the data
+  // (shadow_threshold.hpp) for every method but l2, whose default keeps every
+  // observation because that is the published least-squares baseline
+  // (DiLiGenT's 4.10 deg on the ball) it reproduces.
+  void use_data_shadow_threshold(double value);
   // Gives every method's options the same progress report (solve_result.hpp).
   void set_progress(const SolveProgress& progress);
 };
