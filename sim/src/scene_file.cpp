@@ -236,6 +236,21 @@ object: {type: blob, size_mm: 96}
 material: lambert
 albedo: {type: noise, values: [0.55, 0.9], period_mm: 20, seed: 7}
 )"},
+      // The robust family's test objects: the bunny standing on a floor, so
+      // its ears, head and body cast long shadows on itself and the floor.
+      {"bunny-shadows", R"(name: bunny-shadows
+object: {type: blob, size_mm: 96, footprint: {shape: square, size_mm: 96}}
+material: lambert
+albedo: 0.8
+cast_shadows: true
+)"},
+      // The same with a sharp specular lobe on top of the diffuse one.
+      {"bunny-specular", R"(name: bunny-specular
+object: {type: blob, size_mm: 96, footprint: {shape: square, size_mm: 96}}
+material: "cook-torrance:roughness=0.1,ks=0.3,f0=0.9"
+albedo: 0.8
+cast_shadows: true
+)"},
   };
   return kPresets;
 }

@@ -19,12 +19,12 @@ std::optional<double> parse_falloff(const std::string& text) {
 }
 
 void SolveSettings::set_progress(const SolveProgress& progress) {
-  l2.progress = robust.progress = monotonic.progress = bipolynomial.progress = automatic.progress = progress;
+  l2.progress = robust.progress = rpca.progress = l1.progress = sbl.progress = monotonic.progress = bipolynomial.progress = automatic.progress = progress;
   shape_prior.options.progress = progress;
 }
 
 void SolveSettings::use_data_shadow_threshold(double value) {
-  robust.shadow_threshold = monotonic.shadow_threshold = bipolynomial.shadow_threshold = value;
+  robust.shadow_threshold = rpca.shadow_threshold = l1.shadow_threshold = sbl.shadow_threshold = monotonic.shadow_threshold = bipolynomial.shadow_threshold = value;
   automatic.monotonic.shadow_threshold = automatic.bipolynomial.shadow_threshold = value;
 }
 
@@ -37,21 +37,29 @@ void SolveSettings::resolve() {
   if (shadow_threshold) {
     l2.shadow_threshold = *shadow_threshold;
     robust.shadow_threshold = monotonic.shadow_threshold = bipolynomial.shadow_threshold = *shadow_threshold;
+    rpca.shadow_threshold = l1.shadow_threshold = sbl.shadow_threshold = *shadow_threshold;
     a.monotonic.shadow_threshold = a.bipolynomial.shadow_threshold = *shadow_threshold;
   }
   if (t_low) l2.t_low = robust.t_low = bipolynomial.t_low = a.bipolynomial.t_low = *t_low;
   if (min_observations)
-    l2.min_observations = robust.min_observations = monotonic.min_observations = *min_observations;
+    l2.min_observations = robust.min_observations = monotonic.min_observations = rpca.min_observations =
+        l1.min_observations = sbl.min_observations = *min_observations;
   if (max_iterations) bipolynomial.max_iterations = a.bipolynomial.max_iterations = *max_iterations;
   bipolynomial.falloff = a.bipolynomial.falloff = parse_falloff(falloff);
   a.monotonic.gamma = monotonic.gamma;
   a.monotonic.plateau_tolerance = monotonic.plateau_tolerance;
-  if (threads) l2.threads = robust.threads = monotonic.threads = bipolynomial.threads = a.threads = *threads;
+  if (threads) {
+    l2.threads = robust.threads = monotonic.threads = bipolynomial.threads = a.threads = *threads;
+    rpca.threads = l1.threads = sbl.threads = *threads;
+  }
   // Only the chosen method's options are checked here: l2 takes
   // --shadow-threshold -1, which the others refuse.
   if (method == "monotonic") monotonic.check();
   if (method == "bilinear" || method == "biquadratic" || method == "bicubic") bipolynomial.check();
   if (method == "auto") a.check();
+  if (method == "rpca") rpca.check();
+  if (method == "l1") l1.check();
+  if (method == "sbl") sbl.check();
 }
 
 }  // namespace lightstage::pipeline

@@ -9,9 +9,11 @@
 #include "lightstage/host/solvers/auto.hpp"
 #include "lightstage/host/solvers/bipolynomial.hpp"
 #include "lightstage/host/solvers/lambertian.hpp"
+#include "lightstage/host/solvers/low_rank.hpp"
 #include "lightstage/host/solvers/monotonic.hpp"
 #include "lightstage/host/solvers/robust.hpp"
 #include "lightstage/host/solvers/shape_prior.hpp"
+#include "lightstage/host/solvers/sparse_regression.hpp"
 
 #include <optional>
 #include <string>
@@ -33,6 +35,9 @@ struct SolveSettings {
   std::string method = "l2";  // a name of the registry (solve_methods.hpp)
   L2Options l2;
   RobustOptions robust;
+  RpcaOptions rpca;  // the published robust family (low_rank.hpp, sparse_regression.hpp)
+  L1Options l1;
+  SblOptions sbl;
   MonotonicOptions monotonic;
   BiPolynomialOptions bipolynomial;
   AutoOptions automatic;

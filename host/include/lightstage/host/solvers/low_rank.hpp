@@ -1,0 +1,41 @@
+#pragma once
+// Robust photometric stereo by low-rank matrix completion and recovery (Wu,
+// Ganesh, Shi, Matsushita, Wang, Ma, ACCV 2010; ALGORITHMS.md "Robust
+// family"). The observation matrix D (pixels × images) is split into A, of
+// low rank (Lambertian: rank 3), plus E, sparse (highlights, cast shadows):
+//     min ‖A‖_* + λ‖E‖₁  subject to  P_Ω(D) = P_Ω(A + E),
+// Ω = the observations that are neither shadowed (≤ shadow_threshold) nor
+// saturated — those are missing entries A fills in. Solved by the inexact
+// augmented Lagrange multiplier method; then each pixel's normal is the least
+// squares fit of its row of A to the known lights (all images).
+//
+// Memory: the whole matrix is never held at once. Pixels are processed in
+// blocks of block_pixels rows (each block is itself low rank, so the
+// decomposition is done per block, in parallel); a block costs about
+// 5 × block_pixels × images doubles. λ = lambda_scale / √block_pixels.
+
+#include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/solvers/solve_result.hpp"
+
+#include <nlohmann/json.hpp>
+
+namespace lightstage {
+
+struct RpcaOptions {
+  double shadow_threshold = 1e-6;  // observations ≤ this are missing entries (≥ 0)
+  int block_pixels = 2048;         // rows of D decomposed together (≥ 16)
+  double lambda_scale = 1.0;       // λ = lambda_scale / √rows
+  int max_iterations = 500;        // ALM rounds
+  double tolerance = 1e-7;         // stop when ‖P_Ω(D − A − E)‖_F / ‖P_Ω(D)‖_F < tolerance
+  int min_observations = 3;        // a pixel with fewer in Ω is rejected (≥ 3)
+  bool drop_saturated = true;
+  int threads = 0;
+  SolveProgress progress;
+
+  void check() const;
+  nlohmann::json to_json() const;
+};
+
+SolveResult solve_rpca(const Observations& observations, const RpcaOptions& options = {});
+
+}  // namespace lightstage

@@ -1,0 +1,225 @@
+#include "lightstage/host/solvers/low_rank.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/common/parallel.hpp"
+#include "lightstage/host/solvers/pixel_observations.hpp"
+#include "solvers/lambert_fit.hpp"
+#include "solvers/pixel_driver.hpp"
+
+#include <fmt/format.h>
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <vector>
+
+namespace lightstage {
+namespace {
+
+using Matrix = Eigen::MatrixXd;
+
+// Growth of the penalty μ per round and its ceiling relative to the start
+// (Lin, Chen, Ma's inexact ALM).
+constexpr double kRho = 1.5;
+constexpr double kMuCeiling = 1e7;
+// Residuals within this fraction of a pixel's median observed value count as explained (confidence).
+constexpr double kInlierBand = 0.05;
+
+// Singular value thresholding through the images × images Gram matrix (there
+// are far fewer images than pixels): X = U Σ Vᵀ, returns U max(Σ − τ, 0) Vᵀ
+// = X V diag(max(σ − τ, 0) / σ) Vᵀ. Also returns the rank kept.
+int shrink_singular_values(const Matrix& x, double tau, Matrix& out) {
+  const Matrix gram = x.transpose() * x;
+  Eigen::SelfAdjointEigenSolver<Matrix> eigen(gram);
+  const Eigen::VectorXd sigma = eigen.eigenvalues().cwiseMax(0).cwiseSqrt();
+  int rank = 0;
+  for (Eigen::Index k = sigma.size() - 1; k >= 0 && sigma(k) > tau; --k) ++rank;
+  if (rank == 0) {
+    out.setZero(x.rows(), x.cols());
+    return 0;
+  }
+  const Matrix v = eigen.eigenvectors().rightCols(rank);
+  const Eigen::VectorXd factor =
+      (sigma.tail(rank).array() - tau).cwiseQuotient(sigma.tail(rank).array()).matrix();
+  out.noalias() = (x * v) * factor.asDiagonal() * v.transpose();
+  return rank;
+}
+
+double spectral_norm(const Matrix& x) {
+  const Matrix gram = x.transpose() * x;
+  Eigen::SelfAdjointEigenSolver<Matrix> eigen(gram, Eigen::EigenvaluesOnly);
+  return std::sqrt(std::max(eigen.eigenvalues().maxCoeff(), 0.0));
+}
+
+struct BlockOutcome {
+  std::size_t solved = 0, too_few = 0, degenerate = 0;
+  int iterations = 0;
+  int rank = 0;
+};
+
+// Decomposes rows [begin, end) of the observations and writes their maps.
+BlockOutcome solve_block(const Observations& obs, const RpcaOptions& options, std::size_t begin,
+                         std::size_t end, SolveResult& result) {
+  BlockOutcome outcome;
+  const auto rows = static_cast<Eigen::Index>(end - begin);
+  const auto images = static_cast<Eigen::Index>(obs.image_count());
+  Matrix d = Matrix::Zero(rows, images);
+  Matrix omega = Matrix::Zero(rows, images);  // 1 = observed (in Ω)
+  std::vector<std::uint8_t> enough(static_cast<std::size_t>(rows), 0);
+  PixelObservations pixel;
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    load_pixel(obs, begin + static_cast<std::size_t>(r), options.drop_saturated, pixel);
+    int count = 0;
+    for (Eigen::Index j = 0; j < images; ++j) {
+      if (pixel.usable[static_cast<std::size_t>(j)] && pixel.values(j) > options.shadow_threshold) {
+        d(r, j) = pixel.values(j);
+        omega(r, j) = 1;
+        ++count;
+      }
+    }
+    enough[static_cast<std::size_t>(r)] = count >= options.min_observations ? 1 : 0;
+  }
+  const double d_norm = d.norm();
+  Matrix a = Matrix::Zero(rows, images), e = Matrix::Zero(rows, images);
+  if (d_norm > 0) {
+    const double lambda =
+        options.lambda_scale / std::sqrt(static_cast<double>(std::max<Eigen::Index>(rows, images)));
+    const double norm_two = spectral_norm(d);
+    Matrix y = d / std::max(norm_two, d.cwiseAbs().maxCoeff() / lambda);
+    double mu = 1.25 / norm_two;
+    const double mu_max = mu * kMuCeiling;
+    Matrix t(rows, images), z(rows, images);
+    for (int it = 0; it < options.max_iterations; ++it) {
+      ++outcome.iterations;
+      // E: soft threshold on Ω; outside Ω it takes whatever A leaves (no constraint there).
+      t = d - a + y / mu;
+      const double shrink = lambda / mu;
+      e = omega.cwiseProduct((t.array().abs() - shrink).cwiseMax(0).matrix().cwiseProduct(t.cwiseSign())) +
+          (1 - omega.array()).matrix().cwiseProduct(t);
+      t = d - e + y / mu;
+      outcome.rank = shrink_singular_values(t, 1 / mu, a);
+      z = omega.cwiseProduct(d - a - e);
+      y += mu * z;
+      mu = std::min(mu * kRho, mu_max);
+      if (z.norm() / d_norm < options.tolerance) break;
+    }
+  }
+  // Normals: each pixel's row of A fitted to its lights over every image (A fills the missing ones).
+  std::vector<Eigen::Index> all(static_cast<std::size_t>(images));
+  std::iota(all.begin(), all.end(), Eigen::Index{0});
+  std::vector<double> observed;
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    const std::size_t p = begin + static_cast<std::size_t>(r);
+    if (!enough[static_cast<std::size_t>(r)]) {
+      ++outcome.too_few;
+      continue;
+    }
+    load_pixel(obs, p, options.drop_saturated, pixel);  // its lights (per pixel with near lights)
+    const Eigen::VectorXd row = a.row(r).transpose();
+    Eigen::Vector3d s;
+    if (!detail::lambert_fit(pixel.lights, row, all, s) || s.norm() < 1e-12) {
+      ++outcome.degenerate;
+      continue;
+    }
+    observed.clear();
+    for (Eigen::Index j = 0; j < images; ++j)
+      if (omega(r, j) > 0) observed.push_back(d(r, j));
+    const auto mid = observed.begin() + static_cast<std::ptrdiff_t>(observed.size() / 2);
+    std::nth_element(observed.begin(), mid, observed.end());
+    const double band = kInlierBand * std::max(*mid, 1e-12);
+    double squared = 0;
+    std::size_t inside = 0;
+    for (Eigen::Index j = 0; j < images; ++j) {
+      if (omega(r, j) == 0) continue;
+      const double residual = pixel.lights.row(j).dot(s) - d(r, j);
+      squared += residual * residual;
+      if (std::abs(residual) < band) ++inside;
+    }
+    const auto count = static_cast<double>(observed.size());
+    const Eigen::Vector3d n = s.normalized();
+    const cv::Point& at = obs.pixels[p];
+    result.normals.at<cv::Vec3f>(at) =
+        cv::Vec3f(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
+    result.albedo.at<float>(at) = static_cast<float>(s.norm());
+    result.residual.at<float>(at) = static_cast<float>(std::sqrt(squared / count));
+    result.confidence.at<float>(at) = static_cast<float>(static_cast<double>(inside) / count);
+    result.solved.at<std::uint8_t>(at) = 255;
+    ++outcome.solved;
+  }
+  return outcome;
+}
+
+}  // namespace
+
+void RpcaOptions::check() const {
+  detail::check_shadow_threshold("RpcaOptions", shadow_threshold);
+  if (block_pixels < 16) fail("RpcaOptions.block_pixels: must be at least 16, got {}", block_pixels);
+  if (!(lambda_scale > 0 && std::isfinite(lambda_scale)))
+    fail("RpcaOptions.lambda_scale: must be positive, got {}", lambda_scale);
+  if (max_iterations < 1) fail("RpcaOptions.max_iterations: must be at least 1, got {}", max_iterations);
+  if (!(tolerance > 0 && std::isfinite(tolerance)))
+    fail("RpcaOptions.tolerance: must be positive, got {}", tolerance);
+  detail::check_min_observations("RpcaOptions", min_observations);
+  detail::check_threads("RpcaOptions", threads);
+}
+
+nlohmann::json RpcaOptions::to_json() const {
+  return {{"shadow_threshold", shadow_threshold},
+          {"block_pixels", block_pixels},
+          {"lambda_scale", lambda_scale},
+          {"max_iterations", max_iterations},
+          {"tolerance", tolerance},
+          {"min_observations", min_observations},
+          {"drop_saturated", drop_saturated},
+          {"threads", threads}};
+}
+
+SolveResult solve_rpca(const Observations& observations, const RpcaOptions& options) {
+  options.check();
+  check_observations(observations, "rpca");
+  const auto start = std::chrono::steady_clock::now();
+  SolveResult result;
+  const cv::Size size = observations.size;
+  result.normals = cv::Mat(size, CV_32FC3, cv::Scalar::all(0));
+  result.albedo = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
+  result.residual = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
+  result.solved = cv::Mat(size, CV_8UC1, cv::Scalar::all(0));
+  result.confidence = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
+  // Equal blocks of at most block_pixels rows; their split depends on the pixel count only, so
+  // results do not depend on the thread count.
+  const std::size_t pixels = observations.pixel_count();
+  const auto block = static_cast<std::size_t>(options.block_pixels);
+  const std::size_t blocks = pixels == 0 ? 0 : (pixels + block - 1) / block;
+  std::vector<BlockOutcome> outcomes(blocks);
+  parallel_for(static_cast<int>(blocks), options.threads, [&](int b) {
+    const std::size_t begin = pixels * static_cast<std::size_t>(b) / blocks;
+    const std::size_t end = pixels * static_cast<std::size_t>(b + 1) / blocks;
+    outcomes[static_cast<std::size_t>(b)] = solve_block(observations, options, begin, end, result);
+    if (options.progress) options.progress(end - begin);
+  });
+  SolveSummary& summary = result.summary;
+  summary.method = "rpca";
+  summary.pixels_in_mask = pixels;
+  double iterations = 0;
+  int max_rank = 0;
+  for (const auto& o : outcomes) {
+    summary.pixels_solved += o.solved;
+    summary.pixels_rejected_too_few_observations += o.too_few;
+    summary.pixels_rejected_degenerate += o.degenerate;
+    iterations += o.iterations;
+    max_rank = std::max(max_rank, o.rank);
+  }
+  if (blocks > 0) iterations /= static_cast<double>(blocks);
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.parameters = options.to_json();
+  summary.settings = {{"blocks", blocks, fmt::format("{} blocks", blocks)},
+                      {"iterations", iterations, fmt::format("{:.0f} ALM rounds per block", iterations)},
+                      {"rank", max_rank, fmt::format("rank of A at most {}", max_rank)}};
+  summary.message = summary.format_message();
+  return result;
+}
+
+}  // namespace lightstage
