@@ -10,8 +10,10 @@
 #include "lightstage/host/solvers/auto.hpp"
 #include "lightstage/host/solvers/bipolynomial.hpp"
 #include "lightstage/host/solvers/lambertian.hpp"
+#include "lightstage/host/solvers/low_rank.hpp"
 #include "lightstage/host/solvers/monotonic.hpp"
 #include "lightstage/host/solvers/robust.hpp"
+#include "lightstage/host/solvers/sparse_regression.hpp"
 #include "lightstage/sim/simulate.hpp"
 
 #include <benchmark/benchmark.h>
@@ -93,10 +95,35 @@ void BM_Robust(benchmark::State& state) {
   state.SetLabel(robust_estimator_name(options.estimator));
 }
 BENCHMARK(BM_Robust)
-    ->Arg(static_cast<int>(RobustEstimator::kIrlsL1))
     ->Arg(static_cast<int>(RobustEstimator::kRansac))
+    ->Arg(static_cast<int>(RobustEstimator::kIrlsL1))
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+// The published robust family next to l2 and robust (issue 14), same stack, same run.
+void BM_Rpca(benchmark::State& state) {
+  RpcaOptions options;
+  options.threads = kThreads;
+  for (auto _ : state) benchmark::DoNotOptimize(solve_rpca(stack(), options));
+  report(state);
+}
+BENCHMARK(BM_Rpca)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_L1(benchmark::State& state) {
+  L1Options options;
+  options.threads = kThreads;
+  for (auto _ : state) benchmark::DoNotOptimize(solve_l1(stack(), options));
+  report(state);
+}
+BENCHMARK(BM_L1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Sbl(benchmark::State& state) {
+  SblOptions options;
+  options.threads = kThreads;
+  for (auto _ : state) benchmark::DoNotOptimize(solve_sbl(stack(), options));
+  report(state);
+}
+BENCHMARK(BM_Sbl)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_BiPolynomial(benchmark::State& state) {
   BiPolynomialOptions options;

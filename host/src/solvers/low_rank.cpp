@@ -23,7 +23,7 @@ using Matrix = Eigen::MatrixXd;
 
 // Growth of the penalty μ per round and its ceiling relative to the start
 // (Lin, Chen, Ma's inexact ALM).
-constexpr double kRho = 1.5;
+constexpr double kRho = 1.1;
 constexpr double kMuCeiling = 1e7;
 // Residuals within this fraction of a pixel's median observed value count as explained (confidence).
 constexpr double kInlierBand = 0.05;

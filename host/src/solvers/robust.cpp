@@ -62,6 +62,9 @@ nlohmann::json RobustOptions::to_json() const {
 
 namespace {
 
+// RANSAC's refits on its inliers (locally optimised RANSAC).
+constexpr int kRefitRounds = 4;
+
 double median_of(const PixelObservations& pixel, const std::vector<Eigen::Index>& kept,
                  std::vector<double>& scratch) {
   scratch.clear();
@@ -105,6 +108,7 @@ bool ransac(const PixelObservations& pixel, const RobustOptions& options, std::s
     if (std::abs(l.determinant()) < 1e-6) continue;
     const Eigen::Vector3d candidate = l.partialPivLu().solve(
         Eigen::Vector3d(pixel.values(ws.kept[a]), pixel.values(ws.kept[b]), pixel.values(ws.kept[c])));
+    if (candidate.z() <= 0) continue;  // a visible surface faces the camera
     std::size_t count = 0;
     double error = 0;
     for (const Eigen::Index j : ws.kept) {
@@ -121,12 +125,21 @@ bool ransac(const PixelObservations& pixel, const RobustOptions& options, std::s
     }
   }
   if (best_count < 3) return true;  // keep the least-squares start
-  ws.inliers.clear();
-  for (const Eigen::Index j : ws.kept) {
-    if (std::abs(pixel.lights.row(j).dot(best) - pixel.values(j)) < band) ws.inliers.push_back(j);
+  // Local optimisation: least squares on the inliers, whose set is then taken
+  // again from the refit (a few rounds; the triple's own solution is noisy).
+  s = best;
+  std::size_t previous = 0;
+  for (int round = 0; round < kRefitRounds; ++round) {
+    ws.inliers.clear();
+    for (const Eigen::Index j : ws.kept) {
+      if (std::abs(pixel.lights.row(j).dot(s) - pixel.values(j)) < band) ws.inliers.push_back(j);
+    }
+    if (ws.inliers.size() < 3 || ws.inliers.size() == previous) break;
+    previous = ws.inliers.size();
+    Eigen::Vector3d refit;
+    if (!detail::lambert_fit(pixel.lights, pixel.values, ws.inliers, refit)) break;
+    s = refit;
   }
-  Eigen::Vector3d refit;
-  s = detail::lambert_fit(pixel.lights, pixel.values, ws.inliers, refit) ? refit : best;
   return true;
 }
 

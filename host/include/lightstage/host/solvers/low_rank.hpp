@@ -24,7 +24,7 @@ namespace lightstage {
 struct RpcaOptions {
   double shadow_threshold = 1e-6;  // observations ≤ this are missing entries (≥ 0)
   int block_pixels = 2048;         // rows of D decomposed together (≥ 16)
-  double lambda_scale = 1.0;       // λ = lambda_scale / √rows
+  double lambda_scale = 1.0;       // λ = lambda_scale / √rows (Candès et al.: 1 / √max(n1, n2))
   int max_iterations = 500;        // ALM rounds
   double tolerance = 1e-7;         // stop when ‖P_Ω(D − A − E)‖_F / ‖P_Ω(D)‖_F < tolerance
   int min_observations = 3;        // a pixel with fewer in Ω is rejected (≥ 3)

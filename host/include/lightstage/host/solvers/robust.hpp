@@ -2,14 +2,19 @@
 // Robust Lambertian photometric stereo: the Lambertian model fitted only to
 // the observations it can explain. Per pixel:
 //  1. selection: drop shadows (value ≤ shadow_threshold) and saturated
-//     observations, then keep the lowest t_low fraction (drops highlights);
+//     observations, then keep the lowest t_low fraction (default 1: all;
+//     lower values drop highlights but also keep penumbrae, so they lose on
+//     cast shadows);
 //  2. a statistical estimator on what is left:
+//     - ransac (default): exact solutions from random light triples facing
+//       the camera, the one with most observations within ransac_threshold ×
+//       median value wins, then least squares on its inliers, whose set is
+//       re-taken from each refit (locally optimised RANSAC); the random
+//       sequence is seeded per pixel, so results do not depend on the thread
+//       count. It beats the published robust family (rpca, l1, sbl) on the
+//       cast-shadow and specular bunnies (tests/pipeline/robust_family_test);
 //     - irls-l1: iteratively reweighted least squares for min Σ|l_j·s − i_j|
 //       (weights 1 / max(|r_j|, ε), ε = irls_epsilon × median value);
-//     - ransac: exact solutions from random light triples, the one with most
-//       observations within ransac_threshold × median value wins, refitted
-//       on its inliers; the random sequence is seeded per pixel, so results
-//       do not depend on the thread count;
 //     - none: least squares on the selection.
 // Outputs: normal, albedo |s|, RMS residual over the selection, confidence =
 // the fraction of the selection the final fit explains within the inlier band.
@@ -33,8 +38,8 @@ RobustEstimator parse_robust_estimator(const std::string& text);  // "none" | "i
 
 struct RobustOptions {
   double shadow_threshold = 1e-6;  // observations ≤ this are shadows (≥ 0)
-  double t_low = 0.5;              // kept fraction of the lit observations, in (0, 1]
-  RobustEstimator estimator = RobustEstimator::kIrlsL1;
+  double t_low = 1.0;              // kept fraction of the lit observations, in (0, 1]; 1 = all
+  RobustEstimator estimator = RobustEstimator::kRansac;  // best on the robust-family objects (docs/solvers.md)
   int irls_iterations = 30;        // irls-l1: reweighting rounds
   double irls_epsilon = 1e-3;      // irls-l1: residual floor, relative to the median value
   int ransac_iterations = 200;     // ransac: triples tried
