@@ -19,12 +19,14 @@ std::optional<double> parse_falloff(const std::string& text) {
 }
 
 void SolveSettings::set_progress(const SolveProgress& progress) {
-  l2.progress = robust.progress = rpca.progress = l1.progress = sbl.progress = monotonic.progress = bipolynomial.progress = automatic.progress = progress;
+  l2.progress = robust.progress = rpca.progress = l1.progress = sbl.progress = monotonic.progress =
+      bipolynomial.progress = automatic.progress = progress;
   shape_prior.options.progress = progress;
 }
 
 void SolveSettings::use_data_shadow_threshold(double value) {
-  robust.shadow_threshold = rpca.shadow_threshold = l1.shadow_threshold = sbl.shadow_threshold = monotonic.shadow_threshold = bipolynomial.shadow_threshold = value;
+  robust.shadow_threshold = rpca.shadow_threshold = l1.shadow_threshold = sbl.shadow_threshold =
+      monotonic.shadow_threshold = bipolynomial.shadow_threshold = value;
   automatic.monotonic.shadow_threshold = automatic.bipolynomial.shadow_threshold = value;
 }
 

@@ -64,6 +64,8 @@ namespace {
 
 // RANSAC's refits on its inliers (locally optimised RANSAC).
 constexpr int kRefitRounds = 4;
+// RANSAC stops early once an all-inlier triple has been drawn with this probability.
+constexpr double kConfidence = 0.999;
 
 double median_of(const PixelObservations& pixel, const std::vector<Eigen::Index>& kept,
                  std::vector<double>& scratch) {
@@ -122,6 +124,11 @@ bool ransac(const PixelObservations& pixel, const RobustOptions& options, std::s
       best_count = count;
       best_error = error;
       best = candidate;
+      // Adaptive stop (Fischler–Bolles): enough triples that an all-inlier
+      // one was drawn with probability kConfidence at the inlier ratio seen.
+      const double ratio = static_cast<double>(best_count) / static_cast<double>(m);
+      const double miss = 1 - ratio * ratio * ratio;
+      if (miss <= 0 || it + 1 >= std::log(1 - kConfidence) / std::log(miss)) break;
     }
   }
   if (best_count < 3) return true;  // keep the least-squares start

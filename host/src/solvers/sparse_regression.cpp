@@ -17,6 +17,8 @@ namespace {
 
 // The confidence band: residuals within this fraction of the median value count as explained.
 constexpr double kInlierBand = 0.05;
+// SBL stops when no error variance γ_j moved by more than this × (median value)².
+constexpr double kGammaTolerance = 1e-8;
 
 struct Workspace {
   std::vector<Eigen::Index> kept;
@@ -119,23 +121,25 @@ void sbl_pixel(const PixelObservations& pixel, const SblOptions& options, Worksp
       m.noalias() += ws.weights(j) * l * l.transpose();
       rhs.noalias() += ws.weights(j) * pixel.values(j) * l;
     }
-    const Eigen::LDLT<Eigen::Matrix3d> ldlt(m);
-    if (ldlt.info() != Eigen::Success) break;
-    const Eigen::Vector3d next = ldlt.solve(rhs);
+    bool invertible = false;
+    Eigen::Matrix3d m_inverse;
+    m.computeInverseWithCheck(m_inverse, invertible);
+    if (!invertible) break;
+    const Eigen::Vector3d next = m_inverse * rhs;
     if (!next.allFinite()) break;
     double change = 0;
     for (const Eigen::Index j : ws.kept) {
       const Eigen::Vector3d l = pixel.lights.row(j).transpose();
       const double w = ws.weights(j), g = ws.gamma(j);
       const double r = pixel.values(j) - l.dot(next);
-      const double p_jj = w - w * w * l.dot(ldlt.solve(l));
+      const double p_jj = w - w * w * l.dot(m_inverse * l);
       const double e = g * w * r;
       const double updated = std::max(e * e + g - g * g * p_jj, 0.0);
       change = std::max(change, std::abs(updated - g));
       ws.gamma(j) = updated;
     }
     s = next;
-    if (change < 1e-12 * scale * scale) break;
+    if (change < kGammaTolerance * scale * scale) break;
   }
   finish(pixel, ws, s, scale, out, it);
 }
@@ -172,9 +176,8 @@ void L1Options::check() const {
 }
 
 nlohmann::json L1Options::to_json() const {
-  return {{"shadow_threshold", shadow_threshold}, {"iterations", iterations},
-          {"epsilon", epsilon},                   {"min_observations", min_observations},
-          {"drop_saturated", drop_saturated},     {"threads", threads}};
+  return {{"shadow_threshold", shadow_threshold}, {"iterations", iterations},         {"epsilon", epsilon},
+          {"min_observations", min_observations}, {"drop_saturated", drop_saturated}, {"threads", threads}};
 }
 
 void SblOptions::check() const {
@@ -186,9 +189,8 @@ void SblOptions::check() const {
 }
 
 nlohmann::json SblOptions::to_json() const {
-  return {{"shadow_threshold", shadow_threshold}, {"iterations", iterations},
-          {"noise", noise},                       {"min_observations", min_observations},
-          {"drop_saturated", drop_saturated},     {"threads", threads}};
+  return {{"shadow_threshold", shadow_threshold}, {"iterations", iterations},         {"noise", noise},
+          {"min_observations", min_observations}, {"drop_saturated", drop_saturated}, {"threads", threads}};
 }
 
 SolveResult solve_l1(const Observations& observations, const L1Options& options) {

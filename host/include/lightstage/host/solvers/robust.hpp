@@ -39,7 +39,8 @@ RobustEstimator parse_robust_estimator(const std::string& text);  // "none" | "i
 struct RobustOptions {
   double shadow_threshold = 1e-6;  // observations ≤ this are shadows (≥ 0)
   double t_low = 1.0;              // kept fraction of the lit observations, in (0, 1]; 1 = all
-  RobustEstimator estimator = RobustEstimator::kRansac;  // best on the robust-family objects (docs/solvers.md)
+  RobustEstimator estimator =
+      RobustEstimator::kRansac;    // best on the robust-family objects (docs/solvers.md)
   int irls_iterations = 30;        // irls-l1: reweighting rounds
   double irls_epsilon = 1e-3;      // irls-l1: residual floor, relative to the median value
   int ransac_iterations = 200;     // ransac: triples tried
