@@ -103,9 +103,8 @@ void add_solve_flags(CLI::App& sub, pipeline::SolveSettings& args) {
                  "estimates it from the object, 0 is the Lambertian start as published (DiLiGenT ball: "
                  "biquadratic 2.21 deg with 0, 1.23 with auto)")
       ->capture_default_str();
-  sub.add_option("--estimator", args.estimator,
-                 "robust: ransac (locally optimised, the default), irls-l1 or none")
-      ->check(CLI::IsMember({"ransac", "irls-l1", "none"}))
+  sub.add_option("--estimator", args.estimator, "robust: irls-l1, ransac (locally optimised) or none")
+      ->check(CLI::IsMember({"irls-l1", "ransac", "none"}))
       ->capture_default_str();
   sub.add_option("--azimuth-from", args.azimuth_from,
                  "monotonic: azimuth from isotropy (Alldrin-Kriegman) or from another method's normals "

@@ -87,8 +87,6 @@ TEST(Robust, RejectsShadowsAndSpecularSpikesThatBreakL2) {
   for (const auto estimator : {RobustEstimator::kIrlsL1, RobustEstimator::kRansac, RobustEstimator::kNone}) {
     RobustOptions options;
     options.estimator = estimator;
-    // Plain least squares needs the highlights dropped by the selection; the estimators do not.
-    if (estimator == RobustEstimator::kNone) options.t_low = 0.5;
     const SolveResult result = solve_robust(scene.observations, options);
     EXPECT_EQ(result.summary.method, "robust");
     const double error = mean_error(result, scene);

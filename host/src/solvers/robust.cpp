@@ -56,6 +56,7 @@ nlohmann::json RobustOptions::to_json() const {
           {"ransac_threshold", ransac_threshold},
           {"seed", seed},
           {"min_observations", min_observations},
+          {"screen_cast_shadows", screen_cast_shadows},
           {"drop_saturated", drop_saturated},
           {"threads", threads}};
 }
@@ -66,6 +67,14 @@ namespace {
 constexpr int kRefitRounds = 4;
 // RANSAC stops early once an all-inlier triple has been drawn with this probability.
 constexpr double kConfidence = 0.999;
+// The cast-shadow screen drops values under this fraction of the consensus
+// prediction: far enough below that a broad specular lobe biasing the
+// consensus upward does not drop the (darker) diffuse values T_low wants.
+constexpr double kScreenRatio = 0.5;
+// ... and the lights it puts within this many inlier bands of the terminator.
+constexpr double kTerminator = 0.25;
+// The fraction of the lit values the consensus must explain for the screen to act.
+constexpr double kMinConsensus = 0.5;
 
 double median_of(const PixelObservations& pixel, const std::vector<Eigen::Index>& kept,
                  std::vector<double>& scratch) {
@@ -159,6 +168,26 @@ RobustPixelFit fit_robust_pixel(const PixelObservations& pixel, const RobustOpti
   for (Eigen::Index j = 0; j < pixel.count(); ++j) {
     if (pixel.usable[static_cast<std::size_t>(j)] && pixel.values(j) > options.shadow_threshold)
       ws.kept.push_back(j);
+  }
+  // Cast-shadow screen: a consensus fit over every lit observation; values
+  // well below it are light the surface did not get (cast shadows and their
+  // penumbrae, which the darkest-T_low selection below would otherwise prefer).
+  if (options.screen_cast_shadows && ws.kept.size() > 3) {
+    Eigen::Vector3d consensus;
+    if (detail::lambert_fit(pixel.lights, pixel.values, ws.kept, consensus)) {
+      const double band = options.ransac_threshold * std::max(median_of(pixel, ws.kept, ws.scratch), 1e-12);
+      ws.inliers.clear();
+      ransac(pixel, options, pixel_index, band, ws, consensus);
+      // Only a consensus most lit values agree with (a Lambertian pixel with
+      // sparse outliers) is trusted; a broad lobe biases it instead.
+      if (static_cast<double>(ws.inliers.size()) >= kMinConsensus * static_cast<double>(ws.kept.size()))
+        // Also the lights the fit puts at the terminator: there dark noise and
+        // penumbrae are all a value can hold, and T_low would prefer them.
+        std::erase_if(ws.kept, [&](Eigen::Index j) {
+          const double predicted = pixel.lights.row(j).dot(consensus);
+          return pixel.values(j) < kScreenRatio * predicted - band || predicted < kTerminator * band;
+        });
+    }
   }
   if (options.t_low < 1.0) {
     std::stable_sort(ws.kept.begin(), ws.kept.end(),

@@ -38,9 +38,11 @@ RobustEstimator parse_robust_estimator(const std::string& text);  // "none" | "i
 
 struct RobustOptions {
   double shadow_threshold = 1e-6;  // observations ≤ this are shadows (≥ 0)
-  double t_low = 1.0;              // kept fraction of the lit observations, in (0, 1]; 1 = all
-  RobustEstimator estimator =
-      RobustEstimator::kRansac;    // best on the robust-family objects (docs/solvers.md)
+  double t_low = 0.5;              // kept fraction of the lit observations, in (0, 1]
+  RobustEstimator estimator = RobustEstimator::kIrlsL1;
+  // Drop lit values well below a RANSAC consensus fit before the T_low
+  // selection (cast shadows; docs/solvers.md "The robust family").
+  bool screen_cast_shadows = true;
   int irls_iterations = 30;        // irls-l1: reweighting rounds
   double irls_epsilon = 1e-3;      // irls-l1: residual floor, relative to the median value
   int ransac_iterations = 200;     // ransac: triples tried

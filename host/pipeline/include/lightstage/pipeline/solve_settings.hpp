@@ -42,7 +42,7 @@ struct SolveSettings {
   BiPolynomialOptions bipolynomial;
   AutoOptions automatic;
   ShapePriorSettings shape_prior;
-  std::string estimator = "ransac";  // robust: ransac (default), irls-l1 or none
+  std::string estimator = "irls-l1";  // robust: irls-l1, ransac or none
   // monotonic: the azimuth from isotropy or another method's normals (robust:
   // better on the material sweep and the DiLiGenT ball than isotropy).
   std::string azimuth_from = "robust";
