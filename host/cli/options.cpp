@@ -96,7 +96,7 @@ void add_solve_flags(CLI::App& sub, pipeline::SolveSettings& args) {
                  "keep the lowest fraction F of each pixel's remaining observations (default: l2 1, robust "
                  "0.5, bi-polynomial and auto 0.25)");
   sub.add_option("--min-observations", args.min_observations,
-                 "reject pixels with fewer observations (l2, robust, monotonic)");
+                 "reject pixels with fewer observations (l2, robust, monotonic, rpca, l1, sbl)");
   sub.add_option("--max-iterations", args.max_iterations, "bi-polynomial alternations (default 100)");
   sub.add_option("--falloff", args.falloff,
                  "bi-polynomial and auto: the start's incidence fall-off kappa, rho ~ 1 + kappa n.l: 'auto' "
@@ -106,6 +106,8 @@ void add_solve_flags(CLI::App& sub, pipeline::SolveSettings& args) {
   sub.add_option("--estimator", args.estimator, "robust: irls-l1, ransac (locally optimised) or none")
       ->check(CLI::IsMember({"irls-l1", "ransac", "none"}))
       ->capture_default_str();
+  sub.add_flag("--no-shadow-screen", args.no_shadow_screen,
+               "robust: no cast-shadow screen (values far below a RANSAC consensus are kept for T_low)");
   sub.add_option("--azimuth-from", args.azimuth_from,
                  "monotonic: azimuth from isotropy (Alldrin-Kriegman) or from another method's normals "
                  "(l2, robust, bilinear, biquadratic, bicubic, ...)")
