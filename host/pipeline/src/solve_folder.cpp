@@ -55,9 +55,10 @@ SolveInput load_solve_input(const std::filesystem::path& input, const Radiometry
     if (calibration::set_stack_near_lights(input, stack, prepared.observations, &why_not)) {
       light_model = "near (stack)";
     } else if (why_not.find("has no led_position_mm") == std::string::npos) {
-      // The stack has LED positions yet cannot use them: say so, it changes the normals.
-      logger("host")->warn("{}: LED positions not used ({}); solving with distant lights", input.string(),
-                           why_not);
+      // Positions the stack holds yet cannot use change the normals: say so, unless the light was distant.
+      if (why_not.find("distant") == std::string::npos)
+        logger("host")->warn("{}: LED positions not used ({}); solving with distant lights", input.string(),
+                             why_not);
       why = why_not;
     }
   }

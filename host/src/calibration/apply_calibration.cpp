@@ -8,6 +8,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
+#include <fstream>
 #include <map>
 #include <string>
 #include <system_error>
@@ -177,6 +178,20 @@ bool set_near_lights(const StackCalibration& calibration, Observations& observat
 }  // namespace lightstage::calibration
 
 namespace lightstage::calibration {
+namespace {
+
+// `simulate --lights distant` keeps the LEDs' positions in the manifest, but its light is distant.
+bool distant_simulation(const fs::path& manifest) {
+  std::ifstream in(manifest);
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (!j.is_object()) return false;
+  const auto sim = j.find("simulation");
+  if (sim == j.end() || !sim->is_object()) return false;
+  const auto model = sim->find("light_model");
+  return model != sim->end() && model->is_string() && model->get<std::string>() == "distant";
+}
+
+}  // namespace
 
 bool set_stack_near_lights(const fs::path& stack_dir, const ImageStack& stack, Observations& observations,
                            std::string* why_not) {
@@ -192,6 +207,7 @@ bool set_stack_near_lights(const fs::path& stack_dir, const ImageStack& stack, O
   const std::optional<CameraGeometry> camera =
       fs::exists(manifest, error) ? camera_from_manifest(manifest) : std::nullopt;
   if (!camera) return refuse("the manifest records no camera to place the pixels");
+  if (distant_simulation(manifest)) return refuse("the simulator rendered distant lights");
   if (!camera->metric) return refuse("the manifest's camera has no known scale");
   // The point nearest every line LED − t·direction: sum (I − d dᵀ)(c − p) = 0.
   Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
