@@ -129,16 +129,16 @@ nlohmann::json linearise_stack(const fs::path& stack_dir, ImageStack& stack, con
           manifest.string(), response_file.string());
     const InverseResponse response = InverseResponse::load(response_file);
     apply_response(response, stack, stack_dir.string());
-    logger("host")->info("radiometry: frames linearised with {}", response_file.string());
+    logger("host")->debug("radiometry: frames linearised with {}", response_file.string());
     return {{"applied", true}, {"source", "file"}, {"file", response_file.string()}, {"linear", true}};
   }
   if (linearity.linearised_at_capture) {
-    logger("host")->info("radiometry: frames were linearised at capture");
+    logger("host")->debug("radiometry: frames were linearised at capture");
     return {{"applied", false}, {"source", "capture"}, {"linear", true}};
   }
   if (linearity.response) {
     apply_response(*linearity.response, stack, stack_dir.string());
-    logger("host")->info("radiometry: frames linearised with the response recorded in {}", manifest.string());
+    logger("host")->debug("radiometry: frames linearised with the response recorded in {}", manifest.string());
     return {{"applied", true}, {"source", "manifest"}, {"linear", true}};
   }
   if (!linearity.linear) {

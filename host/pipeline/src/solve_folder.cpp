@@ -66,7 +66,6 @@ SolveInput load_solve_input(const std::filesystem::path& input, const Radiometry
                           {"source", light_model == "near (calibration)" ? "calibration"
                                      : light_model == "near (stack)"     ? "stack"
                                                                          : why}};
-  logger("host")->info("lights: {}{}", light_model, light_model == "distant" ? " (" + why + ")" : "");
   return prepared;
 }
 
@@ -91,6 +90,14 @@ SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOpt
   }
   report.summary = io::write_solve_outputs(out, result, input, extra);
   logger("host")->info("{}", result.summary.message);
+  // Said after the solve, so an input error stays one line.
+  logger("host")->info("lights: {} ({}); camera response: {}",
+                       prepared.light_model["model"].get<std::string>(),
+                       prepared.light_model["source"].get<std::string>(),
+                       prepared.response["applied"].get<bool>()
+                           ? "applied from " + prepared.response["source"].get<std::string>()
+                       : prepared.response["source"].get<std::string>() == "capture" ? "applied at capture"
+                                                                                     : "none");
   write_result_report(out, input);
   return report;
 }
