@@ -131,5 +131,37 @@ TEST(RadiometryFromStack, LedPositionsInTheManifestGiveNearLights) {
   EXPECT_GT(reverted.error->mean, 3 * automatic.error->mean);
 }
 
+void set_manifest_radiometry(const fs::path& stack, const nlohmann::json& radiometry) {
+  std::ifstream in(stack / "manifest.json");
+  nlohmann::json manifest = nlohmann::json::parse(in);
+  manifest["radiometry"] = radiometry;
+  std::ofstream(stack / "manifest.json") << manifest.dump(2);
+}
+
+std::string solve_error(const fs::path& stack, const fs::path& out, const SolveCalibration& calibration) {
+  try {
+    solve_folder(stack, l2(), out, calibration);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(RadiometryFromStack, ManifestRadiometryErrorsNameTheField) {
+  const fs::path dir = lightstage::testing::scratch_dir();
+  simulate_to_folder(rig_path(), bumps("identity"), dir / "stack");
+  const fs::path file = dir / "response.json";
+  InverseResponse::identity(16).save(file);
+  SolveCalibration with_response;
+  with_response.response = file;
+  set_manifest_radiometry(dir / "stack", {{"response_applied", true}});
+  EXPECT_THAT(
+      solve_error(dir / "stack", dir / "out1", with_response),
+      AllOf(HasSubstr("manifest.json: radiometry.response_applied"), HasSubstr("without --response")));
+  set_manifest_radiometry(dir / "stack", {{"linear", "yes"}});
+  EXPECT_THAT(solve_error(dir / "stack", dir / "out2", {}),
+              HasSubstr("manifest.json: radiometry.linear: expected true or false"));
+}
+
 }  // namespace
 }  // namespace lightstage::pipeline
