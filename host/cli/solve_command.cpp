@@ -56,8 +56,14 @@ void add_solve(CLI::App& app) {
   sub->add_option("--calibration", args->calibration.file,
                   "light calibration (calibration.json or .lp from `calibrate lights`): its directions and "
                   "intensities replace the stack's, its LED positions give near lights");
-  sub->add_flag("--distant-lights", args->calibration.distant,
-                "with --calibration: ignore LED positions (one direction per light for every pixel)");
+  sub->add_flag(
+      "--distant-lights", args->calibration.distant,
+      "ignore LED positions of the calibration or the stack (one direction per light for every pixel)");
+  sub->add_option(
+         "--response", args->calibration.response,
+         "camera response (from `lightstage camera response`) to linearise the frames with; default: "
+         "the one the stack's manifest records")
+      ->check(CLI::ExistingFile);
   add_output_flags(*sub, args->output,
                    "summary.json plus out (the folder) and total_seconds (load, solve and write)");
   sub->callback([args, sub] {

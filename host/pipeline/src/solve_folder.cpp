@@ -7,6 +7,7 @@
 #include "lightstage/host/io/solve_output.hpp"
 #include "lightstage/host/io/stack_io.hpp"
 #include "lightstage/host/report/report.hpp"
+#include "lightstage/host/stack_response.hpp"
 #include "lightstage/pipeline/solve_methods.hpp"
 
 #include <fmt/format.h>
@@ -32,6 +33,7 @@ SolveInput load_solve_input(const std::filesystem::path& input, const Radiometry
                             const SolveCalibration& calibration) {
   radiometry.check();
   ImageStack stack = io::load_stack(input);
+  const nlohmann::json response = linearise_stack(input, stack, calibration.response);
   std::optional<calibration::StackCalibration> applied;
   if (!calibration.file.empty())
     applied = calibration::apply_calibration_file(calibration.file, input, stack);
@@ -39,11 +41,31 @@ SolveInput load_solve_input(const std::filesystem::path& input, const Radiometry
   prepared.observations = make_observations(stack, radiometry);
   prepared.shadow = estimate_shadow_threshold(stack, prepared.observations);
   prepared.ground_truth = std::move(stack.ground_truth);
+  prepared.response = response;
+  std::string light_model = "distant";
+  std::string why = calibration.distant ? "--distant-lights" : "no LED positions";
   if (applied) {
     const bool near = !calibration.distant && calibration::set_near_lights(*applied, prepared.observations);
+    if (near) light_model = "near (calibration)";
     prepared.calibration = applied->describe();
     prepared.calibration["near_lights"] = near;
   }
+  if (!calibration.distant && light_model == "distant") {
+    std::string why_not;
+    if (calibration::set_stack_near_lights(input, stack, prepared.observations, &why_not)) {
+      light_model = "near (stack)";
+    } else if (why_not.find("has no led_position_mm") == std::string::npos) {
+      // Positions the stack holds yet cannot use change the normals: say so, unless the light was distant.
+      if (why_not.find("distant") == std::string::npos)
+        logger("host")->warn("{}: LED positions not used ({}); solving with distant lights", input.string(),
+                             why_not);
+      why = why_not;
+    }
+  }
+  prepared.light_model = {{"model", light_model == "distant" ? "distant" : "near"},
+                          {"source", light_model == "near (calibration)" ? "calibration"
+                                     : light_model == "near (stack)"     ? "stack"
+                                                                         : why}};
   return prepared;
 }
 
@@ -57,7 +79,9 @@ SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOpt
     fail("{}: {} solved no pixel: {}", input.string(), result.summary.method,
          result.summary.unusable_reason());
   SolveReport report;
-  nlohmann::json extra = {{"radiometry", {{"clamp_to_one", radiometry.clamp_to_one}}}};
+  nlohmann::json extra = {
+      {"radiometry", {{"clamp_to_one", radiometry.clamp_to_one}, {"response", prepared.response}}},
+      {"lights", prepared.light_model}};
   if (!prepared.calibration.is_null()) extra["calibration"] = prepared.calibration;
   if (prepared.ground_truth && !prepared.ground_truth->normals.empty()) {
     report.error =
@@ -66,6 +90,14 @@ SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOpt
   }
   report.summary = io::write_solve_outputs(out, result, input, extra);
   logger("host")->info("{}", result.summary.message);
+  // Said after the solve, so an input error stays one line.
+  logger("host")->info("lights: {} ({}); camera response: {}",
+                       prepared.light_model["model"].get<std::string>(),
+                       prepared.light_model["source"].get<std::string>(),
+                       prepared.response["applied"].get<bool>()
+                           ? "applied from " + prepared.response["source"].get<std::string>()
+                       : prepared.response["source"].get<std::string>() == "capture" ? "applied at capture"
+                                                                                     : "none");
   write_result_report(out, input);
   return report;
 }

@@ -4,7 +4,14 @@
 #include "lightstage/host/calibration/calibration_images.hpp"
 #include "lightstage/host/calibration/lp_file.hpp"
 
+#include <fmt/format.h>
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include <fstream>
 #include <map>
+#include <string>
+#include <system_error>
 
 namespace lightstage::calibration {
 namespace {
@@ -164,6 +171,68 @@ bool set_near_lights(const StackCalibration& calibration, Observations& observat
         camera.ray(uv, origin, direction);
       },
       plane_z_mm.value_or(cal.object_position_mm.z()));
+  observations.near = std::move(near);
+  return true;
+}
+
+}  // namespace lightstage::calibration
+
+namespace lightstage::calibration {
+namespace {
+
+// `simulate --lights distant` keeps the LEDs' positions in the manifest, but its light is distant.
+bool distant_simulation(const fs::path& manifest) {
+  std::ifstream in(manifest);
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (!j.is_object()) return false;
+  const auto sim = j.find("simulation");
+  if (sim == j.end() || !sim->is_object()) return false;
+  const auto model = sim->find("light_model");
+  return model != sim->end() && model->is_string() && model->get<std::string>() == "distant";
+}
+
+}  // namespace
+
+bool set_stack_near_lights(const fs::path& stack_dir, const ImageStack& stack, Observations& observations,
+                           std::string* why_not) {
+  const auto refuse = [why_not](std::string reason) {
+    if (why_not) *why_not = std::move(reason);
+    return false;
+  };
+  if (stack.frames.empty()) return refuse("the stack has no frames");
+  for (const Frame& frame : stack.frames)
+    if (!frame.led_position_mm) return refuse(fmt::format("{} has no led_position_mm", frame.filename));
+  std::error_code error;
+  const fs::path manifest = stack_dir / "manifest.json";
+  const std::optional<CameraGeometry> camera =
+      fs::exists(manifest, error) ? camera_from_manifest(manifest) : std::nullopt;
+  if (!camera) return refuse("the manifest records no camera to place the pixels");
+  if (distant_simulation(manifest)) return refuse("the simulator rendered distant lights");
+  if (!camera->metric) return refuse("the manifest's camera has no known scale");
+  // The point nearest every line LED − t·direction: sum (I − d dᵀ)(c − p) = 0.
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  for (const Frame& frame : stack.frames) {
+    const Eigen::Vector3d d = frame.light_direction.normalized();
+    const Eigen::Matrix3d projector = Eigen::Matrix3d::Identity() - d * d.transpose();
+    a += projector;
+    b += projector * *frame.led_position_mm;
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(a);
+  const Eigen::Vector3d spread = eigen.eigenvalues();  // ascending
+  if (!(spread(0) > 1e-6 * spread(2)))
+    return refuse("the frames' light directions do not meet at an object centre");
+  NearLights near;
+  near.object_centre_mm = a.ldlt().solve(b);
+  near.led_positions_mm.resize(static_cast<Eigen::Index>(stack.frames.size()), 3);
+  for (std::size_t f = 0; f < stack.frames.size(); ++f)
+    near.led_positions_mm.row(static_cast<Eigen::Index>(f)) = stack.frames[f].led_position_mm->transpose();
+  near.points_mm = points_on_plane(
+      observations.pixels,
+      [&camera](const Eigen::Vector2d& uv, Eigen::Vector3d* origin, Eigen::Vector3d* direction) {
+        camera->ray(uv, origin, direction);
+      },
+      near.object_centre_mm.z());
   observations.near = std::move(near);
   return true;
 }

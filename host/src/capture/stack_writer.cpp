@@ -279,6 +279,11 @@ void CaptureStackWriter::write_index(bool complete) {
         {"updated", util::utc_timestamp()}}},
       {"rig", {{"name", rig_.name}, {"file", rig_.source.string()}}},
       {"frames", extra_frames}};
+  // What solve must (not) do to the frames: linearised here, or as the camera gave them.
+  extra["radiometry"] =
+      response_
+          ? nlohmann::json{{"linear", true}, {"response_applied", true}, {"response", response_->to_json()}}
+          : nlohmann::json{{"response_applied", false}};
   if (stack.frames.empty()) {
     // Nothing to index yet: keep the plan where resume can find it.
     io::write_empty_stack(out_, nlohmann::json{{"format", io::kStackFormat},

@@ -48,4 +48,14 @@ StackCalibration apply_calibration_file(const std::filesystem::path& file,
 bool set_near_lights(const StackCalibration& calibration, Observations& observations,
                      std::optional<double> plane_z_mm = std::nullopt);
 
+// Sets observations.near from the stack's own LED positions (manifest
+// frames[i].led_position_mm, every frame) and the camera its manifest records;
+// the object centre, where the stack's intensities hold, is where the frames'
+// light directions from their LEDs meet (least squares), surface points on
+// the plane through it. Returns false, with the reason in *why_not, when a
+// frame has no position, the manifest records no metric camera or the
+// directions do not meet.
+bool set_stack_near_lights(const std::filesystem::path& stack_dir, const ImageStack& stack,
+                           Observations& observations, std::string* why_not);
+
 }  // namespace lightstage::calibration

@@ -27,8 +27,9 @@ struct SolveReport {
 // directions and intensities replace the stack's; its LED positions give
 // near lights unless `distant` is set.
 struct SolveCalibration {
-  std::filesystem::path file;  // calibration.json or .lp; empty = none
-  bool distant = false;
+  std::filesystem::path file;      // calibration.json or .lp; empty = none
+  bool distant = false;            // ignore LED positions (calibration's or the stack's)
+  std::filesystem::path response;  // camera response (`camera response`); empty = what the manifest records
 };
 
 // A stack folder made ready to solve: its observations (with the calibration
@@ -40,6 +41,8 @@ struct SolveInput {
   ShadowThreshold shadow;
   std::optional<GroundTruth> ground_truth;
   nlohmann::json calibration = nullptr;  // describe() of the applied calibration, with near_lights
+  nlohmann::json response = nullptr;     // the camera response applied (stack_response.hpp)
+  nlohmann::json light_model = nullptr;  // {"model": "near"|"distant", "source": why}
 };
 SolveInput load_solve_input(const std::filesystem::path& input, const RadiometryOptions& radiometry,
                             const SolveCalibration& calibration = {});
