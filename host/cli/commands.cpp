@@ -21,6 +21,8 @@ const std::vector<Command>& commands() {
       {"calibrate", add_calibrate},
       {"report", add_report},
       {"integrate", add_integrate},
+      {"export", add_export},
+      {"import", add_import},
   };
   return table;
 }

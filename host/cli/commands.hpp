@@ -36,5 +36,7 @@ void add_camera(CLI::App& app);
 void add_calibrate(CLI::App& app);
 void add_report(CLI::App& app);
 void add_integrate(CLI::App& app);
+void add_export(CLI::App& app);
+void add_import(CLI::App& app);
 
 }  // namespace lightstage::cli

@@ -1,0 +1,42 @@
+#pragma once
+// RTI exchange files: PTM 1.2 (LRGB and RGB) and HSH `.rti` (orders 2, 3).
+// Layouts and their sources: docs/rti-formats.md. Coefficients are quantised
+// to bytes on writing, so a round trip is exact to within one quantisation
+// step per coefficient.
+
+#include "lightstage/host/reflectance/rti_basis.hpp"
+
+#include <Eigen/Core>
+
+#include <array>
+#include <filesystem>
+#include <string>
+
+namespace lightstage::io {
+
+// A fitted RTI in memory: per colour channel (r, g, b) a pixels × terms
+// matrix, pixels row-major with row 0 the top of the image.
+struct RtiImage {
+  RtiBasis basis = RtiBasis::ptm;
+  int width = 0;
+  int height = 0;
+  std::array<Eigen::MatrixXf, 3> channels;
+};
+
+enum class PtmFormat { lrgb, rgb };
+
+// PTM_FORMAT_LRGB stores one luminance polynomial and a colour per pixel: the
+// channels are taken as L(l) · rgb, with rgb the pixel's colour at the light
+// overhead (exact when a pixel's chromaticity does not change with the light).
+std::string format_ptm(const RtiImage& image, PtmFormat format);
+void write_ptm(const std::filesystem::path& path, const RtiImage& image, PtmFormat format);
+// Throws InputError "source: field: ..." for a bad header or short data.
+RtiImage parse_ptm(const std::string& bytes, const std::string& source);
+RtiImage read_ptm(const std::filesystem::path& path);
+
+std::string format_hsh(const RtiImage& image);
+void write_hsh(const std::filesystem::path& path, const RtiImage& image);
+RtiImage parse_hsh(const std::string& bytes, const std::string& source);
+RtiImage read_hsh(const std::filesystem::path& path);
+
+}  // namespace lightstage::io

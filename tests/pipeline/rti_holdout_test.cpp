@@ -1,0 +1,27 @@
+// Leave-one-light-out relighting of the per-pixel RTI models on DiLiGenT's
+// ball (skipped without the shared data): the figures docs/rti-formats.md
+// reports, pinned loosely so a broken fit or evaluation shows.
+#include "lightstage/pipeline/rti_exchange.hpp"
+#include "lightstage/testing/paths.hpp"
+
+#include <gtest/gtest.h>
+
+namespace lightstage {
+namespace {
+
+TEST(RtiHoldout, BallMatchesThePublishedRtiFigures) {
+  const auto ball = testing::shared_data_dir() / "diligent/ballPNG";
+  if (testing::shared_data_dir().empty() || !std::filesystem::exists(ball))
+    GTEST_SKIP() << "no DiLiGenT ball";
+  const auto r = pipeline::rti_holdout({ball, 12});
+  ASSERT_EQ(r["held_out"].size(), 12u);
+  // Issue 20 quotes 0.209 for PTM, HSH-3 and l2 on its protocol; measured 0.197 / 0.200 / 0.195.
+  for (const char* model : {"ptm", "hsh2", "hsh3", "l2"}) {
+    const double e = r["models"][model]["relative_rmse"].get<double>();
+    EXPECT_GT(e, 0.15) << model;
+    EXPECT_LT(e, 0.22) << model;
+  }
+}
+
+}  // namespace
+}  // namespace lightstage
