@@ -7,11 +7,14 @@
 
 #include "lightstage/common/geometry.hpp"
 #include "lightstage/common/rig.hpp"
+#include "lightstage/host/eval/angular_error.hpp"
 #include "lightstage/host/near_lights.hpp"
 #include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/solvers/solve_result.hpp"
 #include "lightstage/pipeline/synthetic_observations.hpp"
 #include "lightstage/sim/material.hpp"
 
+#include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
 #include <cmath>
@@ -21,6 +24,13 @@
 namespace lightstage::testing {
 
 using ReflectanceScene = pipeline::SyntheticScene;
+
+// Mean angular error of `result` against the scene's truth; every pixel must be solved.
+inline double mean_error(const SolveResult& result, const ReflectanceScene& scene) {
+  const auto stats = angular_error(result.normals, scene.truth, scene.observations.mask).stats;
+  EXPECT_EQ(stats.missing, 0u) << result.summary.message;
+  return stats.mean;
+}
 
 inline Eigen::MatrixX3d hemisphere_lights(int count, unsigned seed, double min_z = 0.1) {
   return pipeline::random_hemisphere_lights(count, min_z, seed);

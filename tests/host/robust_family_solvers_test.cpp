@@ -22,12 +22,7 @@ namespace {
 using testing::error_of;
 using testing::hemisphere_lights;
 using testing::make_reflectance_scene;
-
-double mean_error(const SolveResult& result, const testing::ReflectanceScene& scene) {
-  const auto stats = angular_error(result.normals, scene.truth, scene.observations.mask).stats;
-  EXPECT_EQ(stats.missing, 0u) << result.summary.message;
-  return stats.mean;
-}
+using testing::mean_error;
 
 struct Family {
   const char* name;

@@ -183,11 +183,7 @@ SolveResult solve_rpca(const Observations& observations, const RpcaOptions& opti
   const auto start = std::chrono::steady_clock::now();
   SolveResult result;
   const cv::Size size = observations.size;
-  result.normals = cv::Mat(size, CV_32FC3, cv::Scalar::all(0));
-  result.albedo = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
-  result.residual = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
-  result.solved = cv::Mat(size, CV_8UC1, cv::Scalar::all(0));
-  result.confidence = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
+  detail::allocate_result_maps(size, result);
   // Equal blocks of at most block_pixels rows; their split depends on the pixel count only, so
   // results do not depend on the thread count.
   const std::size_t pixels = observations.pixel_count();

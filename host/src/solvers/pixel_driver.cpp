@@ -33,16 +33,20 @@ void check_threads(const char* owner, int threads) {
   if (threads < 0) fail("{}.threads (--threads): must be 0 (automatic) or positive, got {}", owner, threads);
 }
 
-double run_per_pixel(const Observations& observations, const DriverSettings& settings,
-                     const std::function<PixelCore()>& make_core, SolveResult& result) {
-  const auto start = std::chrono::steady_clock::now();
-  check_observations(observations, settings.method.c_str());
-  const cv::Size size = observations.size;
+void allocate_result_maps(cv::Size size, SolveResult& result) {
   result.normals = cv::Mat(size, CV_32FC3, cv::Scalar::all(0));
   result.albedo = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
   result.residual = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
   result.solved = cv::Mat(size, CV_8UC1, cv::Scalar::all(0));
   result.confidence = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
+}
+
+double run_per_pixel(const Observations& observations, const DriverSettings& settings,
+                     const std::function<PixelCore()>& make_core, SolveResult& result) {
+  const auto start = std::chrono::steady_clock::now();
+  check_observations(observations, settings.method.c_str());
+  const cv::Size size = observations.size;
+  allocate_result_maps(size, result);
   const int k = settings.coefficient_count;
   if (k > 0) result.coefficients = cv::Mat(size, CV_32FC(k), cv::Scalar::all(0));
 

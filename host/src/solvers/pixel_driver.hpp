@@ -84,4 +84,7 @@ void check_threads(const char* owner, int threads);                       // 0 (
 double run_per_pixel(const Observations& observations, const DriverSettings& settings,
                      const std::function<PixelCore()>& make_core, SolveResult& result);
 
+// Zeroed normal, albedo, residual, solved and confidence maps of `size` in `result`.
+void allocate_result_maps(cv::Size size, SolveResult& result);
+
 }  // namespace lightstage::detail
