@@ -138,7 +138,8 @@ nlohmann::json linearise_stack(const fs::path& stack_dir, ImageStack& stack, con
   }
   if (linearity.response) {
     apply_response(*linearity.response, stack, stack_dir.string());
-    logger("host")->debug("radiometry: frames linearised with the response recorded in {}", manifest.string());
+    logger("host")->debug("radiometry: frames linearised with the response recorded in {}",
+                          manifest.string());
     return {{"applied", true}, {"source", "manifest"}, {"linear", true}};
   }
   if (!linearity.linear) {

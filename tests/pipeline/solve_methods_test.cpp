@@ -26,8 +26,8 @@ SyntheticScene lambert_scene() {
 }
 
 TEST(SolveMethods, ListsEveryMethodInHelpOrder) {
-  EXPECT_THAT(solve_method_names(), ElementsAre("l2", "robust", "monotonic", "bilinear", "biquadratic", "bicubic",
-                                                "auto", "rpca", "l1", "sbl", "shape-prior"));
+  EXPECT_THAT(solve_method_names(), ElementsAre("l2", "robust", "monotonic", "bilinear", "biquadratic",
+                                                "bicubic", "auto", "rpca", "l1", "sbl", "shape-prior"));
   for (const auto& method : solve_methods()) EXPECT_FALSE(method.help.empty()) << method.name;
 }
 
