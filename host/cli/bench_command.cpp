@@ -44,26 +44,28 @@ void add_bench_holdout(CLI::App& bench) {
   auto* settings = &args->settings;
   CLI::App* sub = bench.add_subcommand(
       "holdout",
-      "Leave-one-light-out relighting error of the per-pixel RTI models on a stack: PTM (biquadratic), "
-      "HSH order 2 and 3, and l2 Lambertian.\n"
+      "Leave-one-light-out relighting error on a stack of the per-pixel RTI models, PTM (biquadratic), "
+      "HSH order 2 and 3, and l2 Lambertian, and of the solve methods that relight (--methods; each solved "
+      "on the other lights with default settings and relit as `relight` does). The same as `relight "
+      "--holdout`.\n"
       "N lights evenly spaced in the stack's order are held out one at a time; each model is fitted on the "
       "others and relit at the held-out light; relative RMSE = |relit - photo| / |photo| over the mask "
       "(grey values as solve uses them), averaged over the held-out lights.\n"
       "Example: lightstage bench holdout --input data/ballPNG --held-out 12");
   sub->add_option("--input", args->input, "stack folder")->required();
   sub->add_option("--held-out", settings->held_out, "lights held out one at a time")->capture_default_str();
+  sub->add_option("--methods", settings->methods, "solve methods also measured (none: --methods none)")
+      ->delimiter(',')
+      ->capture_default_str();
+  sub->add_option("--threads", settings->threads, "solver threads (0 = all)")->capture_default_str();
   sub->add_flag("--json", args->json, "print the result as one JSON object");
   sub->callback([args] {
     args->settings.input = args->input;
     const nlohmann::json r = pipeline::rti_holdout(args->settings);
-    if (args->json) {
+    if (args->json)
       fmt::print("{}\n", r.dump());
-      return;
-    }
-    fmt::print("leave-one-light-out on {} ({} of {} lights held out, {} pixels): relative RMSE\n",
-               args->input, r["held_out"].size(), r["lights"].get<int>(), r["pixels"].get<long>());
-    for (const auto& [name, m] : r["models"].items())
-      fmt::print("  {:5} {:.4f}\n", name, m["relative_rmse"].get<double>());
+    else
+      fmt::print("{}", pipeline::format_holdout_table(r));
   });
 }
 

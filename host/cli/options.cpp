@@ -106,8 +106,9 @@ void add_solve_flags(CLI::App& sub, pipeline::SolveSettings& args) {
   sub.add_option("--estimator", args.estimator, "robust: irls-l1, ransac (locally optimised) or none")
       ->check(CLI::IsMember({"irls-l1", "ransac", "none"}))
       ->capture_default_str();
-  sub.add_flag("--no-shadow-screen", args.no_shadow_screen,
-               "robust: no cast-shadow screen (values far below a RANSAC consensus are kept for T_low)");
+  sub.add_flag("--shadow-screen", args.shadow_screen,
+               "robust: drop values far below a RANSAC consensus before T_low (cast shadows the shadow "
+               "threshold does not catch)");
   sub.add_option("--azimuth-from", args.azimuth_from,
                  "monotonic: azimuth from isotropy (Alldrin-Kriegman) or from another method's normals "
                  "(l2, robust, bilinear, biquadratic, bicubic, ...)")

@@ -24,6 +24,14 @@ void add_shape_prior_flags(CLI::App& sub, pipeline::ShapePriorSettings& args) {
                  "shape-prior: Gaussian sigma (pixels) of Eq. 4.6")
       ->capture_default_str();
   sub.add_flag("!--no-refine", args.options.refine, "shape-prior: skip the Nelder-Mead refinement (Eq. 4.7)");
+  sub.add_flag(
+      "!--no-keep-prior", args.options.keep_prior,
+      "shape-prior: use the fit's normal everywhere, even where the prior's explains the images as well");
+  sub.add_option(
+         "--keep-prior-margin", args.options.keep_prior_margin,
+         "shape-prior: the prior's normal is kept unless the fit's lowers the pixel's photometric cost by "
+         "more than this many times the fit's median cost")
+      ->capture_default_str();
 }
 
 }  // namespace lightstage::cli

@@ -23,6 +23,12 @@ constexpr double kOneSigmaQuantile = 0.8413;  // median + 1 σ of a normal distr
 constexpr double kDarkestLevelQuantile = 0.1, kDarkestNoiseQuantile = 0.25;
 constexpr double kNoiseSigmas = 3;
 constexpr double kMaxLevelBias = 0.1;
+// Clipped noise (below): the half-normal's 1 σ quantile, the fewest partner
+// values worth a quantile, and how far under the lit values noise must sit
+// to be told from the dimmest shading of noise-free data.
+constexpr double kHalfNormalSigmaQuantile = 0.6827;
+constexpr std::size_t kMinClippedSamples = 200;
+constexpr double kMaxClippedNoiseRatio = 0.05;
 
 double quantile(std::vector<float> values, double q) {
   if (values.empty()) return 0;
@@ -40,6 +46,40 @@ std::vector<float> darkest_observations(const Observations& observations) {
   for (std::size_t p = 0; p < rows; p += stride)
     darkest.push_back(observations.intensities.row(static_cast<Eigen::Index>(p)).minCoeff());
   return darkest;
+}
+
+// A camera without a black level clips the negative half of the noise in its
+// shadows to exact zeros: a shadowed pixel then has zeros and about as many
+// small positive values, the noise's other half (a half-normal whose 1 σ
+// quantile is σ). Noise-free data has zeros too, but the values next to them
+// are the dimmest shading, a sizeable part of the pixel's lit values; so the
+// partners count as noise only when they sit far below those. 0 = not found.
+double clipped_noise_sigma(const Observations& observations) {
+  const auto rows = static_cast<std::size_t>(observations.intensities.rows());
+  const auto images = static_cast<std::size_t>(observations.intensities.cols());
+  if (images == 0) return 0;
+  const std::size_t stride = std::max<std::size_t>(1, rows / kMaxObjectPixels);
+  std::vector<float> partners, lit_medians, positive;
+  for (std::size_t p = 0; p < rows; p += stride) {
+    const auto row = observations.intensities.row(static_cast<Eigen::Index>(p));
+    positive.clear();
+    std::size_t zeros = 0;
+    for (Eigen::Index j = 0; j < row.size(); ++j) {
+      if (!std::isfinite(row(j))) continue;
+      if (row(j) <= 0) {
+        ++zeros;
+      } else {
+        positive.push_back(row(j));
+      }
+    }
+    if (zeros == 0 || positive.size() < 2 * zeros) continue;
+    std::sort(positive.begin(), positive.end());
+    partners.insert(partners.end(), positive.begin(), positive.begin() + static_cast<std::ptrdiff_t>(zeros));
+    lit_medians.push_back(positive[positive.size() / 2]);
+  }
+  if (partners.size() < kMinClippedSamples) return 0;
+  const double sigma = quantile(partners, kHalfNormalSigmaQuantile);
+  return sigma < kMaxClippedNoiseRatio * quantile(lit_medians, 0.5) ? sigma : 0;
 }
 
 // Every frame's values at a sample of the pixels outside the (dilated) mask.
@@ -68,7 +108,7 @@ std::vector<float> background_values(const ImageStack& stack) {
 }
 
 ShadowThreshold estimate(const std::vector<float>& darkest, const std::vector<float>& background,
-                         std::string source) {
+                         double clipped_sigma, std::string source) {
   ShadowThreshold t;
   t.source = std::move(source);
   t.object_samples = darkest.size();
@@ -79,6 +119,10 @@ ShadowThreshold estimate(const std::vector<float>& darkest, const std::vector<fl
     // level at a clipped zero has no spread below it) is the noise.
     t.level = quantile(background, 0.5);
     t.noise = quantile(background, kOneSigmaQuantile) - t.level;
+  } else if (clipped_sigma > 0) {
+    // No background, shadows clipped at zero: the level is zero, the partners give σ.
+    t.level = 0;
+    t.noise = clipped_sigma;
   } else if (!darkest.empty()) {
     // No background: the darkest observations of the pixels that have
     // shadows (a low quantile: many pixels may have none).
@@ -120,11 +164,12 @@ std::string ShadowThreshold::describe() const {
 }
 
 ShadowThreshold estimate_shadow_threshold(const ImageStack& stack, const Observations& observations) {
-  return estimate(darkest_observations(observations), background_values(stack), source_of(stack));
+  return estimate(darkest_observations(observations), background_values(stack),
+                  clipped_noise_sigma(observations), source_of(stack));
 }
 
 ShadowThreshold estimate_shadow_threshold(const Observations& observations) {
-  return estimate(darkest_observations(observations), {}, "noise floor");
+  return estimate(darkest_observations(observations), {}, clipped_noise_sigma(observations), "noise floor");
 }
 
 }  // namespace lightstage

@@ -2,6 +2,7 @@
 #include "lightstage/host/io/rti_files.hpp"
 #include "lightstage/host/reflectance/rti_basis.hpp"
 #include "lightstage/testing/errors.hpp"
+#include "synthetic.hpp"
 
 #include <gtest/gtest.h>
 
@@ -13,16 +14,7 @@ namespace {
 
 using testing::error_of;
 
-Eigen::MatrixX3d lights(int count, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(0, 1);
-  Eigen::MatrixX3d l(count, 3);
-  for (int i = 0; i < count; ++i) {
-    const double z = 0.2 + 0.8 * u(rng), phi = 2 * M_PI * u(rng), r = std::sqrt(1 - z * z);
-    l.row(i) << r * std::cos(phi), r * std::sin(phi), z;
-  }
-  return l;
-}
+Eigen::MatrixX3d lights(int count, unsigned seed) { return testing::uniform_z_lights(count, seed, 0.2); }
 
 // A w × h object: per pixel a Lambertian normal with a glossy lobe, one
 // chromaticity per pixel (what PTM LRGB can hold exactly).
@@ -143,6 +135,26 @@ TEST(RtiFiles, PtmStoresRowsBottomToTop) {
   EXPECT_NEAR(back.channels[0](0, 5), 1, 1e-2);
   EXPECT_NEAR(back.channels[0](1, 5), 0, 1e-2);
   EXPECT_LT(static_cast<unsigned char>(bytes[data + 5]), static_cast<unsigned char>(bytes[data + 6 + 5]));
+}
+
+// relight reads an .rti's first row as the image's top (LRti::loadHSH flips
+// it, then writes planes bottom-up) and writes it so (saveUniversal), unlike .ptm.
+TEST(RtiFiles, HshStoresRowsTopToBottom) {
+  io::RtiImage image;
+  image.basis = RtiBasis::hsh2;
+  image.width = 1;
+  image.height = 2;
+  for (auto& c : image.channels) {
+    c = Eigen::MatrixXf::Zero(2, 4);
+    c(0, 0) = 1;  // top pixel bright, bottom dark
+  }
+  const std::string bytes = io::format_hsh(image);
+  const std::size_t data = bytes.size() - 2 * 3 * 4;
+  EXPECT_EQ(static_cast<unsigned char>(bytes[data]), 255);        // first pixel, red, term 0: the top
+  EXPECT_EQ(static_cast<unsigned char>(bytes[data + 3 * 4]), 0);  // second pixel: the bottom
+  const io::RtiImage back = io::parse_hsh(bytes, "t.rti");
+  EXPECT_NEAR(back.channels[0](0, 0), 1, 1e-2);
+  EXPECT_NEAR(back.channels[0](1, 0), 0, 1e-2);
 }
 
 TEST(RtiFiles, HshRoundTripsAndRelightsWithinOnePercent) {

@@ -35,11 +35,15 @@ struct Scenario {
   bool refine = true;
   int k = 9;
   std::uint64_t seed = 1;
+  int size = kSize;
+  int max_evaluations = 4000;
+  bool keep_prior = true;
 };
 
 struct Outcome {
   double mean_deg = 0;        // estimated normals vs truth
   double prior_mean_deg = 0;  // prior normals vs truth
+  nlohmann::json parameters;  // SolveResult::parameters
 };
 
 std::string scene_yaml(const Scenario& s) {
@@ -66,8 +70,8 @@ Outcome run_case(const Scenario& s) {
   }
   sim::SimulateOptions sim_options;
   sim_options.scene = scene_file.string();
-  sim_options.width = kSize;
-  sim_options.height = kSize;
+  sim_options.width = s.size;
+  sim_options.height = s.size;
   sim::NaturalCaptureOptions capture;
   capture.response = s.response;
   capture.seed = s.seed;
@@ -75,7 +79,7 @@ Outcome run_case(const Scenario& s) {
   const sim::NaturalCapture natural = sim::simulate_natural(rig, sim_options, capture);
   const ImageStack& stack = natural.stack;
   const cv::Mat& truth = stack.ground_truth->normals;
-  const auto camera = surface::CameraModel::orthographic(truth.size(), 102.4 / kSize);
+  const auto camera = surface::CameraModel::orthographic(truth.size(), 102.4 / s.size);
 
   cv::Mat prior = truth, prior_valid = stack.mask;
   if (!s.truth_prior) {
@@ -97,11 +101,13 @@ Outcome run_case(const Scenario& s) {
   ShapePriorOptions options;
   options.sh_dimension = s.k;
   options.refine = s.refine;
-  options.max_evaluations = 4000;
+  options.max_evaluations = s.max_evaluations;
+  options.keep_prior = s.keep_prior;
   const SolveResult result = solve_shape_prior(obs, prior, prior_valid, options);
   Outcome o;
   o.mean_deg = angular_error(result.normals, truth, stack.mask).stats.mean;
   o.prior_mean_deg = angular_error(prior, truth, stack.mask).stats.mean;
+  o.parameters = result.parameters;
   return o;
 }
 
@@ -168,6 +174,51 @@ TEST(ShapePrior, RefinementHelpsWithAlbedoContrast) {
   EXPECT_LT(refined.mean_deg, 3.0);
 }
 
+// The guarantee: whatever the prior's degradation, the result is no
+// worse than the prior's own normals. 64² and a shorter refinement keep the
+// sweep (six priors per scene) inside the sanitizer build's time.
+void expect_never_worse_than_the_prior(const std::string& scene) {
+  for (const int beta : {0, 1, 2, 3, 4, 5}) {
+    Scenario s;
+    s.scene = scene;
+    s.beta = beta;
+    s.size = 64;
+    s.max_evaluations = 1000;
+    const Outcome o = run_case(s);
+    std::printf("%s, beta %d prior: %.2f deg (prior %.2f deg), prior kept at %.1f%%\n", scene.c_str(), beta,
+                o.mean_deg, o.prior_mean_deg, 100 * o.parameters["kept_prior"]["fraction"].get<double>());
+    EXPECT_LE(o.mean_deg, o.prior_mean_deg) << scene << " beta " << beta;
+  }
+}
+
+TEST(ShapePrior, NeverEndsWorseThanItsPriorBumps) { expect_never_worse_than_the_prior("bumps"); }
+
+TEST(ShapePrior, NeverEndsWorseThanItsPriorBunny) { expect_never_worse_than_the_prior("bunny"); }
+
+TEST(ShapePrior, NeverEndsWorseThanItsPriorSphere) { expect_never_worse_than_the_prior("sphere"); }
+
+TEST(ShapePrior, KeepsTheCleanPriorWhereTheFitDoesNotExplainTheImagesBetter) {
+  // A clean sphere prior (under half a degree) is better than the SH fit,
+  // whose error is the model's (random nonlinear responses): most of it is kept.
+  Scenario s;
+  s.scene = "sphere";
+  s.size = 64;
+  s.max_evaluations = 1500;
+  const Outcome kept = run_case(s);
+  s.keep_prior = false;
+  const Outcome fit_only = run_case(s);
+  std::printf("clean sphere prior %.2f deg: fit only %.2f deg, prior kept at %.1f%%: %.2f deg\n",
+              kept.prior_mean_deg, fit_only.mean_deg,
+              100 * kept.parameters["kept_prior"]["fraction"].get<double>(), kept.mean_deg);
+  EXPECT_GT(fit_only.mean_deg, kept.prior_mean_deg);  // the case the fallback is for
+  EXPECT_LT(kept.mean_deg, fit_only.mean_deg);
+  EXPECT_GT(kept.parameters["kept_prior"]["fraction"].get<double>(), 0.5);
+  EXPECT_EQ(fit_only.parameters["kept_prior"]["pixels"].get<std::size_t>(), 0u);
+  EXPECT_EQ(kept.parameters["keep_prior"], true);
+  EXPECT_EQ(kept.parameters["keep_prior_margin"], ShapePriorOptions{}.keep_prior_margin);
+  EXPECT_TRUE(kept.parameters["kept_prior"].contains("shading_model"));
+}
+
 TEST(NaturalCapture, DescriptionFitsAStackManifestTopLevel) {
   // describe() must not use the manifest's reserved keys: its per-image list
   // is "per_frame", not "frames" (which write_stack would read as per-frame
@@ -207,6 +258,11 @@ TEST(ShapePrior, ErrorsNameTheProblem) {
   ShapePriorOptions bad;
   bad.sh_dimension = 10;
   EXPECT_NE(testing::error_of([&] { bad.check(); }).find("must be 9 or 16, got 10"), std::string::npos);
+  ShapePriorOptions bad_margin;
+  bad_margin.keep_prior_margin = -1;
+  EXPECT_NE(
+      testing::error_of([&] { bad_margin.check(); }).find("--keep-prior-margin) must be in [0, 10], got -1"),
+      std::string::npos);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include "lightstage/testing/paths.hpp"
 #include "synthetic.hpp"
 
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -54,6 +55,35 @@ TEST(HostSolveOutput, WritesEveryFileAndASummary) {
   EXPECT_EQ(summary["parameters"]["t_low"], 1.0);
   EXPECT_EQ(summary["stack_images"], 8);
   EXPECT_TRUE(summary.contains("time"));
+}
+
+TEST(HostSolveFolder, AChoiceMapIsWrittenInColourWithItsLegendAndCounts) {
+  const auto scene = testing::make_scene(20, 10, 8, 3, false);
+  SolveResult result = solve_lambertian(scene.observations, L2Options{});
+  result.choices = {"first", "second"};
+  result.choice = cv::Mat(result.normals.size(), CV_8UC1, cv::Scalar::all(0));
+  result.choice.setTo(1, result.solved);
+  result.choice(cv::Rect(0, 0, 5, 10)).setTo(2);
+  const auto dir = testing::scratch_dir() / "out";
+  const auto summary = io::write_solve_outputs(dir, result, "/some/input");
+  ASSERT_TRUE(summary.contains("method_map"));
+  const auto& choices = summary["method_map"]["choices"];
+  ASSERT_EQ(choices.size(), 2u);
+  EXPECT_EQ(choices[0]["method"], "first");
+  EXPECT_EQ(choices[0]["pixels"], 150);
+  EXPECT_EQ(choices[1]["pixels"], 50);
+  EXPECT_EQ(summary["files"]["method_map"], "method_map.png");
+  const cv::Mat picture = io::read_image(dir / "method_map.png");
+  ASSERT_EQ(picture.type(), CV_8UC3);
+  // Each choice in its legend colour (the PNG holds BGR).
+  const std::string first = choices[0]["colour"], second = choices[1]["colour"];
+  const auto colour_at = [&](int x, int y) {
+    const cv::Vec3b bgr = picture.at<cv::Vec3b>(y, x);
+    return fmt::format("#{:02x}{:02x}{:02x}", bgr[2], bgr[1], bgr[0]);
+  };
+  EXPECT_EQ(colour_at(10, 5), first);
+  EXPECT_EQ(colour_at(2, 5), second);
+  EXPECT_NE(first, second);
 }
 
 TEST(HostSolveFolder, ReadsBackWhatWasWritten) {

@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -27,6 +28,18 @@ inline Vec3 random_upper_direction(std::mt19937& rng, double min_z = 0.1) {
     if (v.z() < 0) v.z() = -v.z();
     if (v.z() >= min_z) return v;
   }
+}
+
+// `count` lights with z uniform in [min_z, 1] and uniform azimuth (the RTI tests' domes).
+inline Eigen::MatrixX3d uniform_z_lights(int count, unsigned seed, double min_z) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  Eigen::MatrixX3d l(count, 3);
+  for (int i = 0; i < count; ++i) {
+    const double z = min_z + (1 - min_z) * u(rng), phi = 2 * M_PI * u(rng), r = std::sqrt(1 - z * z);
+    l.row(i) << r * std::cos(phi), r * std::sin(phi), z;
+  }
+  return l;
 }
 
 struct SyntheticScene {

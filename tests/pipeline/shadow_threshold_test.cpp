@@ -24,9 +24,10 @@ namespace fs = std::filesystem;
 
 constexpr double kReadNoiseE = 20, kFullWellE = 20000;
 
-fs::path simulated(const fs::path& dir, sim::NoiseModel noise, double black_level) {
+fs::path simulated(const fs::path& dir, sim::NoiseModel noise, double black_level,
+                   const std::string& scene = "shiny-sphere") {
   sim::SimulateOptions options;
-  options.scene = "shiny-sphere";
+  options.scene = scene;
   options.light_model = sim::LightModel::kDistant;
   options.width = options.height = 96;
   options.threads = 2;
@@ -89,9 +90,30 @@ TEST(ShadowThreshold, WithoutABlackLevelTheClippedNoiseFloorStillShows) {
   EXPECT_LT(t.value, 5 * sigma);
 }
 
+TEST(ShadowThreshold, WithoutABackgroundTheClippedZerosAndTheirPartnersGiveTheNoise) {
+  // The bunny on its floor fills the frame: no background, and every pixel's
+  // darkest value is a clipped zero. The small values beside the zeros are the noise.
+  const fs::path dir =
+      simulated(testing::scratch_dir() / "filled", sim::NoiseModel::kPhysical, 0, "bunny-shadows");
+  const ImageStack stack = io::load_stack(dir);
+  const ShadowThreshold t = estimated(dir);
+  const double sigma = read_noise_value(stack);
+  RecordProperty("threshold", fmt::format("{:.5f} (read noise {:.5f})", t.value, sigma));
+  EXPECT_EQ(t.background_samples, 0u);
+  EXPECT_EQ(t.level, 0);
+  EXPECT_NEAR(t.noise, sigma, 0.3 * sigma);
+  EXPECT_GT(t.value, 2 * sigma);
+  EXPECT_LT(t.value, 5 * sigma);
+}
+
 TEST(ShadowThreshold, NoiseFreeDataAndTheSweepKeepTheSyntheticDefault) {
   const fs::path dir = simulated(testing::scratch_dir() / "exact", sim::NoiseModel::kNone, 0);
   EXPECT_EQ(estimated(dir).value, kMinShadowThreshold);
+  // Nor does a noise-free object that fills the frame: its zeros have no noise beside them.
+  EXPECT_EQ(estimated(simulated(testing::scratch_dir() / "exact-filled", sim::NoiseModel::kNone, 0,
+                                "bunny-shadows"))
+                .value,
+            kMinShadowThreshold);
   // The sweep's observations: exact zeros in shadow whatever λ (its noise is y + λ·y·X).
   for (const auto& material : default_sweep_materials()) {
     for (const double lambda : {-1.0, 0.05, 0.15}) {

@@ -2,11 +2,13 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
+#include "lightstage/host/solvers/normal_confidence.hpp"
 #include "lightstage/pipeline/shape_prior_method.hpp"
 #include "lightstage/pipeline/solve_checks.hpp"
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <utility>
 
 namespace lightstage::pipeline {
@@ -116,6 +118,16 @@ SolveResult solve_with(const Observations& observations, const SolveSettings& se
          facing_away == 0 ? std::string{}
                           : fmt::format("{} normals facing away clamped to the horizon", facing_away)});
     result.summary.message = result.summary.format_message();
+  }
+  // One confidence for every method with known lights, from the same
+  // observations and threshold (shape-prior estimates its lighting).
+  if (!shape_prior) {
+    ConfidenceOptions confidence;
+    confidence.shadow_threshold = std::max(0.0, used.value);
+    confidence.threads = settings.threads.value_or(0);
+    result.confidence = confidence_from_error(predict_normal_error(observations, result, confidence),
+                                              result.solved, confidence.scale_deg);
+    result.parameters["confidence"] = confidence.to_json();
   }
   return result;
 }

@@ -34,7 +34,7 @@ void SolveSettings::resolve() {
   find_solve_method(method);  // names the known methods when unknown
   radiometry.clamp_to_one = !no_clamp;
   robust.estimator = parse_robust_estimator(estimator);
-  if (no_shadow_screen) robust.screen_cast_shadows = false;
+  robust.screen_cast_shadows = shadow_screen;
   if (azimuth_from != "isotropy") find_solve_method(azimuth_from);
   auto& a = automatic;
   if (shadow_threshold) {

@@ -33,7 +33,7 @@ const std::map<std::string, Setter>& setters() {
          s.falloff = py::isinstance<py::str>(v) ? v.cast<std::string>() : py::str(v).cast<std::string>();
        }},
       {"clamp", [](S& s, const py::handle& v) { s.no_clamp = !v.cast<bool>(); }},
-      {"shadow_screen", [](S& s, const py::handle& v) { s.no_shadow_screen = !v.cast<bool>(); }},
+      {"shadow_screen", [](S& s, const py::handle& v) { s.shadow_screen = v.cast<bool>(); }},
       {"gamma", [](S& s, const py::handle& v) { s.monotonic.gamma = v.cast<double>(); }},
       {"plateau_tolerance",
        [](S& s, const py::handle& v) { s.monotonic.plateau_tolerance = v.cast<double>(); }},
@@ -47,6 +47,9 @@ const std::map<std::string, Setter>& setters() {
       {"smoothing",
        [](S& s, const py::handle& v) { s.shape_prior.options.smoothing_sigma = v.cast<double>(); }},
       {"refine", [](S& s, const py::handle& v) { s.shape_prior.options.refine = v.cast<bool>(); }},
+      {"keep_prior", [](S& s, const py::handle& v) { s.shape_prior.options.keep_prior = v.cast<bool>(); }},
+      {"keep_prior_margin",
+       [](S& s, const py::handle& v) { s.shape_prior.options.keep_prior_margin = v.cast<double>(); }},
   };
   return table;
 }

@@ -18,7 +18,8 @@ constexpr int kMaxSide = 16'384;
 
 int pixel_count(const RtiImage& image) { return image.width * image.height; }
 
-// Both formats store rows bottom to top: file pixel i is image pixel at this index.
+// PTM stores rows bottom to top: file pixel i is image pixel at this index.
+// (HSH .rti stores them top to bottom: docs/rti-formats.md.)
 int image_index(int file_pixel, int width, int height) {
   const int row = file_pixel / width;
   const int col = file_pixel % width;
@@ -112,30 +113,37 @@ PtmQuant ptm_quant(const std::vector<const Eigen::MatrixXf*>& planes) {
 
 }  // namespace
 
+LrgbSplit split_lrgb(const RtiImage& image) {
+  check_image(image, rti_term_count(image.basis));
+  const int n = pixel_count(image);
+  const Eigen::VectorXf overhead = rti_weights(image.basis, Vec3::UnitZ()).cast<float>();
+  LrgbSplit s;
+  s.lum = (image.channels[0] + image.channels[1] + image.channels[2]) / 3.0f;
+  s.rgb.resize(n, 3);
+  for (int i = 0; i < n; ++i) {
+    const float y = s.lum.row(i).dot(overhead);
+    float peak = 0;
+    for (int c = 0; c < 3; ++c) {
+      s.rgb(i, c) = y > 0 ? std::max(image.channels[c].row(i).dot(overhead) / y, 0.0f) : 1.0f;
+      peak = std::max(peak, s.rgb(i, c));
+    }
+    // The brightest channel at 1: the luminance model carries the scale.
+    if (peak > 0) {
+      s.rgb.row(i) /= peak;
+      s.lum.row(i) *= peak;
+    }
+  }
+  return s;
+}
+
 std::string format_ptm(const RtiImage& image, PtmFormat format) {
   if (image.basis != RtiBasis::ptm) fail("PTM export: the model is {}, not ptm", rti_basis_name(image.basis));
   check_image(image, 6);
   const int n = pixel_count(image);
-  Eigen::MatrixXf lum;
-  Eigen::MatrixX3f rgb;
-  if (format == PtmFormat::lrgb) {
-    lum = (image.channels[0] + image.channels[1] + image.channels[2]) / 3.0f;
-    rgb.resize(n, 3);
-    for (int i = 0; i < n; ++i) {
-      // Colour = each channel's share at the light overhead (lu = lv = 0: a5).
-      const float y = lum(i, 5);
-      float peak = 0;
-      for (int c = 0; c < 3; ++c) {
-        rgb(i, c) = y > 0 ? std::max(image.channels[c](i, 5) / y, 0.0f) : 1.0f;
-        peak = std::max(peak, rgb(i, c));
-      }
-      // The brightest channel at 255: the luminance polynomial carries the scale.
-      if (peak > 0) {
-        rgb.row(i) /= peak;
-        lum.row(i) *= peak;
-      }
-    }
-  }
+  LrgbSplit split;
+  if (format == PtmFormat::lrgb) split = split_lrgb(image);
+  const Eigen::MatrixXf& lum = split.lum;
+  const Eigen::MatrixX3f& rgb = split.rgb;
   std::vector<const Eigen::MatrixXf*> planes;
   if (format == PtmFormat::lrgb)
     planes = {&lum};
@@ -241,8 +249,7 @@ std::string format_hsh(const RtiImage& image) {
   };
   put_floats(scale);
   put_floats(bias);
-  for (int f = 0; f < n; ++f) {
-    const int i = image_index(f, image.width, image.height);
+  for (int i = 0; i < n; ++i) {
     for (int c = 0; c < 3; ++c)
       for (int k = 0; k < terms; ++k)
         out.push_back(static_cast<char>(clamp_byte((image.channels[c](i, k) - bias[k]) / scale[k] * 255.0)));
@@ -289,11 +296,10 @@ RtiImage parse_hsh(const std::string& bytes, const std::string& source) {
   const int n = pixel_count(image);
   const unsigned char* p = r.take(static_cast<std::size_t>(n) * 3 * terms, "coefficients");
   for (auto& c : image.channels) c.resize(n, terms);
-  for (int f = 0; f < n; ++f) {
-    const int i = image_index(f, image.width, image.height);
+  for (int i = 0; i < n; ++i) {
     for (int c = 0; c < 3; ++c)
       for (int k = 0; k < terms; ++k)
-        image.channels[c](i, k) = p[(f * 3 + c) * terms + k] / 255.0f * scale[k] + bias[k];
+        image.channels[c](i, k) = p[(i * 3 + c) * terms + k] / 255.0f * scale[k] + bias[k];
   }
   return image;
 }

@@ -10,7 +10,10 @@
 #include "util/atomic_file.hpp"
 #include "util/utc_time.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <system_error>
@@ -31,6 +34,50 @@ double albedo_png_scale(const SolveResult& result) {
   const double scale = values[index];
   return std::isfinite(scale) && scale > 0 ? scale : 1.0;
 }
+
+namespace {
+
+// method_map.png's colours (RGB), one per choice in order; unsolved pixels are black.
+constexpr std::array<std::array<std::uint8_t, 3>, 8> kChoiceColours = {{{31, 119, 180},
+                                                                        {255, 127, 14},
+                                                                        {44, 160, 44},
+                                                                        {214, 39, 40},
+                                                                        {148, 103, 189},
+                                                                        {140, 86, 75},
+                                                                        {227, 119, 194},
+                                                                        {188, 189, 34}}};
+
+// The choice map as a picture, and its legend and counts under summary.method_map.
+void write_method_map(const std::filesystem::path& path, const SolveResult& result, nlohmann::json& summary) {
+  if (result.choice.type() != CV_8UC1 || result.choice.size() != result.normals.size())
+    fail("{}: the choice map must be CV_8UC1 of the normals' size", path.string());
+  if (result.choices.size() > kChoiceColours.size())
+    fail("{}: {} choices, at most {} have colours", path.string(), result.choices.size(),
+         kChoiceColours.size());
+  cv::Mat picture(result.choice.size(), CV_8UC3, cv::Scalar::all(0));
+  std::vector<std::size_t> counts(result.choices.size(), 0);
+  for (int y = 0; y < picture.rows; ++y) {
+    for (int x = 0; x < picture.cols; ++x) {
+      const int k = result.choice.at<std::uint8_t>(y, x);
+      if (k == 0 || k > static_cast<int>(counts.size())) continue;
+      ++counts[static_cast<std::size_t>(k - 1)];
+      const auto& rgb = kChoiceColours[static_cast<std::size_t>(k - 1)];
+      picture.at<cv::Vec3b>(y, x) = cv::Vec3b(rgb[2], rgb[1], rgb[0]);  // OpenCV stores BGR
+    }
+  }
+  write_png(path, picture);
+  nlohmann::json legend = nlohmann::json::array();
+  for (std::size_t k = 0; k < counts.size(); ++k) {
+    const auto& rgb = kChoiceColours[k];
+    legend.push_back({{"method", result.choices[k]},
+                      {"pixels", counts[k]},
+                      {"colour", fmt::format("#{:02x}{:02x}{:02x}", rgb[0], rgb[1], rgb[2])}});
+  }
+  summary["method_map"] = {{"file", path.filename().string()}, {"choices", legend}};
+  summary["files"]["method_map"] = path.filename().string();
+}
+
+}  // namespace
 
 nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const SolveResult& result,
                                    const std::filesystem::path& input, const nlohmann::json& extra) {
@@ -92,6 +139,7 @@ nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const Solve
     }
     summary["files"]["brdf"] = names;
   }
+  if (!result.choice.empty()) write_method_map(dir / "method_map.png", result, summary);
   if (!result.reflectance.is_null()) summary["reflectance"] = result.reflectance;
   for (const auto& [key, value] : extra.items()) summary[key] = value;
   util::write_text_atomic(dir / "summary.json", summary.dump(2) + "\n");

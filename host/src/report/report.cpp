@@ -451,8 +451,35 @@ std::string residual_section(const Inputs& in, const cv::Mat& valid, std::vector
       "residual.pfm: each pixel's RMS misfit over the observations it used (colour clipped at the 99th "
       "percentile, rounded up).",
       std::nullopt, 1);
-  map_figure(in.result_dir / "confidence.pfm", "confidence (1 = the data fit the model)",
-             "confidence.pfm: 1 where the data fit the method's model well.", 1.0, 2);
+  map_figure(in.result_dir / "confidence.pfm", "confidence (0.5 = predicted error of 1 degree)",
+             "confidence.pfm: c = 1 / (1 + e / 1 deg), e the normal's error predicted from the lit lights' "
+             "geometry and the fit's residual; e = 1/c - 1 degrees.",
+             1.0, 2);
+  // auto's per-pixel choices, with the legend and counts the solve recorded.
+  const auto method_map = in.summary.find("method_map");
+  if (method_map != in.summary.end() && method_map->is_object() &&
+      fs::exists(in.result_dir / "method_map.png")) {
+    cv::Mat picture;
+    try {
+      picture = io::read_image(in.result_dir / "method_map.png");
+    } catch (const InputError&) {
+    }
+    if (picture.type() != CV_8UC3 || picture.size() != valid.size()) {
+      notes.push_back("method_map.png: not an image of the result's size; not shown.");
+    } else {
+      std::string legend;
+      for (const auto& choice : method_map->value("choices", nlohmann::json::array())) {
+        if (!choice.is_object()) continue;
+        legend += fmt::format("<span class=\"swatch\" style=\"background:{}\"></span>{} ({} px) ",
+                              escape_html(choice.value("colour", "#000000")),
+                              escape_html(choice.value("method", "?")), choice.value("pixels", 0));
+      }
+      html += "<figure><img class=\"map\" src=\"" + png_data_uri(picture) +
+              "\" alt=\"method per pixel\"><figcaption>method_map.png: the answer each pixel took. " +
+              legend + "</figcaption></figure>\n";
+      any = true;
+    }
+  }
   html += "</div>\n";
   return any ? html : std::string();
 }

@@ -9,6 +9,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
 
 namespace lightstage {
 namespace {
@@ -20,8 +23,12 @@ namespace {
 // Nor is the BIC choice of order: there it prefers bilinear where
 // biquadratic is the more accurate (the ball: 1.40° against 1.25°; the
 // sweep's 43° cone with noise: auto 2.72 / 5.33° against biquadratic's
-// 2.21 / 5.01°). auto is then the biquadratic answer and confidence.
+// 2.21 / 5.01°). auto is then the biquadratic answer.
 constexpr double kMonotonicMinConeDeg = 60;
+
+// What a pixel's answer came from (the method map), 1-based as SolveResult::choice counts.
+enum Choice : std::uint8_t { kBiquadratic = 1, kBilinear, kMonotonic, kMean };
+const std::vector<std::string> kChoiceNames = {"biquadratic", "bilinear", "monotonic", "mean"};
 
 }  // namespace
 
@@ -65,6 +72,7 @@ SolveResult solve_auto(const Observations& observations, const AutoOptions& opti
   settings.progress = options.progress;
   settings.drop_saturated = bipolynomial.drop_saturated;
   settings.coefficient_count = bipolynomial_term_count(bipolynomial.order);
+  settings.choices = kChoiceNames;
   SolveResult result;
   BiPolynomialOptions bilinear = bipolynomial;
   bilinear.order = 1;
@@ -84,6 +92,7 @@ SolveResult solve_auto(const Observations& observations, const AutoOptions& opti
             return;
           }
           if (fit.status != BiPolynomialPixelFit::Status::kSolved) return;
+          std::uint8_t bipolynomial_choice = kBiquadratic;
           if (options.select_order && use_monotonic) {
             const BiPolynomialPixelFit linear = fit_bipolynomial_pixel(pixel, bilinear, ws->bipolynomial);
             auto bic = [](const BiPolynomialPixelFit& f, int terms) {
@@ -100,6 +109,7 @@ SolveResult solve_auto(const Observations& observations, const AutoOptions& opti
               c(4) = linear.coefficients(3);
               fit = linear;
               fit.coefficients = c;
+              bipolynomial_choice = kBilinear;
             }
           }
           const Eigen::Vector3d nb = fit.normal;
@@ -108,9 +118,9 @@ SolveResult solve_auto(const Observations& observations, const AutoOptions& opti
           out.residual = fit.rms;
           out.coefficients = fit.coefficients;
           out.iterations = fit.iterations;
+          out.choice = bipolynomial_choice;
           if (!use_monotonic) {
             out.normal = nb;
-            out.confidence = fit.mean_kept > 0 ? std::clamp(1.0 - fit.rms / fit.mean_kept, 0.0, 1.0) : 0.0;
             return;
           }
           const double phi = std::atan2(nb.y(), nb.x());
@@ -123,13 +133,16 @@ SolveResult solve_auto(const Observations& observations, const AutoOptions& opti
           Eigen::Vector3d n = nb;
           if (apart_deg <= options.agreement_deg) {
             n = (nb + nm).normalized();
+            out.choice = kMean;
           } else {
             const double sm = profile_monotonicity(pixel, nm, monotonic.shadow_threshold);
             const double sb = profile_monotonicity(pixel, nb, monotonic.shadow_threshold);
-            if (sm - sb >= options.monotonic_margin) n = nm;
+            if (sm - sb >= options.monotonic_margin) {
+              n = nm;
+              out.choice = kMonotonic;
+            }
           }
           out.normal = n;
-          out.confidence = std::clamp(1.0 - apart_deg / 10.0, 0.0, 1.0);
         };
       },
       result);
@@ -142,6 +155,16 @@ SolveResult solve_auto(const Observations& observations, const AutoOptions& opti
                         {"x", "n.h"},
                         {"y", "l.h"}};
   SolveSummary& s = result.summary;
+  nlohmann::json counts = nlohmann::json::object();
+  std::string shares;
+  for (std::size_t k = 0; k < kChoiceNames.size(); ++k) {
+    const auto count = static_cast<std::size_t>(cv::countNonZero(result.choice == static_cast<int>(k + 1)));
+    counts[kChoiceNames[k]] = count;
+    if (count == 0 || s.pixels_solved == 0) continue;
+    shares += fmt::format("{}{} {:.0f}%", shares.empty() ? "" : ", ", kChoiceNames[k],
+                          100.0 * static_cast<double>(count) / static_cast<double>(s.pixels_solved));
+  }
+  s.findings.push_back({"method_counts", counts, shares.empty() ? std::string{} : "from " + shares});
   const std::string model = bipolynomial_name(bipolynomial.order);
   if (use_monotonic) {
     s.settings = {{"models", {model, "monotonic"}, model + " + monotonic"}};

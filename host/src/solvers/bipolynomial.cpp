@@ -221,7 +221,6 @@ SolveResult solve_bipolynomial(const Observations& observations, const BiPolynom
           out.normal = fit.normal;
           out.albedo = fit.albedo;
           out.residual = fit.rms;
-          out.confidence = fit.mean_kept > 0 ? 1.0 - fit.rms / fit.mean_kept : 0.0;
           out.coefficients = fit.coefficients;
           out.iterations = fit.iterations;
         };

@@ -25,8 +25,6 @@ using Matrix = Eigen::MatrixXd;
 // (Lin, Chen, Ma's inexact ALM).
 constexpr double kRho = 1.1;
 constexpr double kMuCeiling = 1e7;
-// Residuals within this fraction of a pixel's median observed value count as explained (confidence).
-constexpr double kInlierBand = 0.05;
 
 // Singular value thresholding through the images × images Gram matrix (there
 // are far fewer images than pixels): X = U Σ Vᵀ, returns U max(Σ − τ, 0) Vᵀ
@@ -110,7 +108,6 @@ BlockOutcome solve_block(const Observations& obs, const RpcaOptions& options, st
   // Normals: each pixel's row of A fitted to its lights over every image (A fills the missing ones).
   std::vector<Eigen::Index> all(static_cast<std::size_t>(images));
   std::iota(all.begin(), all.end(), Eigen::Index{0});
-  std::vector<double> observed;
   for (Eigen::Index r = 0; r < rows; ++r) {
     const std::size_t p = begin + static_cast<std::size_t>(r);
     if (!enough[static_cast<std::size_t>(r)]) {
@@ -124,28 +121,20 @@ BlockOutcome solve_block(const Observations& obs, const RpcaOptions& options, st
       ++outcome.degenerate;
       continue;
     }
-    observed.clear();
-    for (Eigen::Index j = 0; j < images; ++j)
-      if (omega(r, j) > 0) observed.push_back(d(r, j));
-    const auto mid = observed.begin() + static_cast<std::ptrdiff_t>(observed.size() / 2);
-    std::nth_element(observed.begin(), mid, observed.end());
-    const double band = kInlierBand * std::max(*mid, 1e-12);
     double squared = 0;
-    std::size_t inside = 0;
+    double count = 0;
     for (Eigen::Index j = 0; j < images; ++j) {
       if (omega(r, j) == 0) continue;
       const double residual = pixel.lights.row(j).dot(s) - d(r, j);
       squared += residual * residual;
-      if (std::abs(residual) < band) ++inside;
+      ++count;
     }
-    const auto count = static_cast<double>(observed.size());
     const Eigen::Vector3d n = s.normalized();
     const cv::Point& at = obs.pixels[p];
     result.normals.at<cv::Vec3f>(at) =
         cv::Vec3f(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
     result.albedo.at<float>(at) = static_cast<float>(s.norm());
     result.residual.at<float>(at) = static_cast<float>(std::sqrt(squared / count));
-    result.confidence.at<float>(at) = static_cast<float>(static_cast<double>(inside) / count);
     result.solved.at<std::uint8_t>(at) = 255;
     ++outcome.solved;
   }

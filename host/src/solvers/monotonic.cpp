@@ -356,7 +356,6 @@ SolveResult solve_monotonic(const Observations& observations, const MonotonicOpt
           out.normal = n;
           out.albedo = albedo;
           out.residual = monotonicity_cost(n, options, *ws);
-          out.confidence = profile_monotonicity(pixel, n, options.shadow_threshold);
         };
       },
       result);

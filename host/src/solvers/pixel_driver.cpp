@@ -38,7 +38,6 @@ void allocate_result_maps(cv::Size size, SolveResult& result) {
   result.albedo = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
   result.residual = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
   result.solved = cv::Mat(size, CV_8UC1, cv::Scalar::all(0));
-  result.confidence = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
 }
 
 double run_per_pixel(const Observations& observations, const DriverSettings& settings,
@@ -49,6 +48,12 @@ double run_per_pixel(const Observations& observations, const DriverSettings& set
   allocate_result_maps(size, result);
   const int k = settings.coefficient_count;
   if (k > 0) result.coefficients = cv::Mat(size, CV_32FC(k), cv::Scalar::all(0));
+  if (!settings.choices.empty()) {
+    if (settings.choices.size() > 255)
+      fail("{}: at most 255 choices, got {}", settings.method, settings.choices.size());
+    result.choice = cv::Mat(size, CV_8UC1, cv::Scalar::all(0));
+    result.choices = settings.choices;
+  }
 
   const std::size_t pixels = observations.pixel_count();
   std::vector<Counters> per_chunk(static_cast<std::size_t>(resolve_threads(settings.threads)));
@@ -78,12 +83,12 @@ double run_per_pixel(const Observations& observations, const DriverSettings& set
           cv::Vec3f(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
       result.albedo.at<float>(at) = static_cast<float>(outcome.albedo);
       result.residual.at<float>(at) = static_cast<float>(outcome.residual);
-      result.confidence.at<float>(at) = static_cast<float>(std::clamp(outcome.confidence, 0.0, 1.0));
       result.solved.at<std::uint8_t>(at) = 255;
       if (k > 0 && outcome.coefficients.size() == k) {
         auto* row = result.coefficients.ptr<float>(at.y) + static_cast<std::ptrdiff_t>(at.x) * k;
         for (int c = 0; c < k; ++c) row[c] = static_cast<float>(outcome.coefficients(c));
       }
+      if (!result.choice.empty()) result.choice.at<std::uint8_t>(at) = outcome.choice;
       ++counters.solved;
       counters.iterations += outcome.iterations;
     }

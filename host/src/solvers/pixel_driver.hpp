@@ -8,9 +8,11 @@
 
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace lightstage::detail {
 
@@ -20,9 +22,9 @@ struct PixelOutcome {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
   double albedo = 0;
   double residual = 0;           // RMS over the observations the method used
-  double confidence = 0;         // [0, 1]
   Eigen::VectorXd coefficients;  // size = coefficient_count of the run
   int iterations = 0;
+  std::uint8_t choice = 0;  // 1-based index into DriverSettings::choices (methods that choose)
 };
 
 // A core solves one pixel; each worker thread gets its own (own workspace).
@@ -51,11 +53,12 @@ class ProgressBatch {
 };
 
 struct DriverSettings {
-  std::string method;          // summary.method
-  int threads = 0;             // 0 = hardware concurrency
-  bool drop_saturated = true;  // passed to load_pixel
-  int coefficient_count = 0;   // > 0: a CV_32FC(k) coefficient map is written
-  SolveProgress progress;      // pixels done; empty = none
+  std::string method;                // summary.method
+  int threads = 0;                   // 0 = hardware concurrency
+  bool drop_saturated = true;        // passed to load_pixel
+  int coefficient_count = 0;         // > 0: a CV_32FC(k) coefficient map is written
+  std::vector<std::string> choices;  // non-empty: a choice map is written (SolveResult::choice)
+  SolveProgress progress;            // pixels done; empty = none
 };
 
 // The settings a method's options carry for the driver: threads, progress and
@@ -77,14 +80,14 @@ void check_min_observations(const char* owner, int min_observations);     // at 
 void check_threads(const char* owner, int threads);                       // 0 (automatic) or positive
 
 // Runs `make_core()` once per worker and the core once per pixel. Fills every
-// map of the result (normals, albedo, residual, solved, confidence and, when
-// asked, coefficients) and the summary counts; the caller adds parameters,
+// map of the result (normals, albedo, residual, solved and, when asked,
+// coefficients and the choice map) and the summary counts; the caller adds parameters,
 // reflectance, the summary's settings and findings, and its message. Returns
 // the mean iterations over solved pixels.
 double run_per_pixel(const Observations& observations, const DriverSettings& settings,
                      const std::function<PixelCore()>& make_core, SolveResult& result);
 
-// Zeroed normal, albedo, residual, solved and confidence maps of `size` in `result`.
+// Zeroed normal, albedo, residual and solved maps of `size` in `result`.
 void allocate_result_maps(cv::Size size, SolveResult& result);
 
 }  // namespace lightstage::detail

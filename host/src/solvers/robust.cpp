@@ -249,7 +249,6 @@ SolveResult solve_robust(const Observations& observations, const RobustOptions& 
           out.normal = fit.s;
           out.albedo = fit.s.norm();
           out.residual = fit.rms;
-          out.confidence = fit.inlier_fraction;
         };
       },
       result);

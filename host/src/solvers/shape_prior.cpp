@@ -48,6 +48,101 @@ RowMatrix smooth_rows(const RowMatrix& values, const std::vector<cv::Point>& pix
   return out;
 }
 
+// Real spherical-harmonic polynomials of order 2 (k = 9) or 3 (k = 16) of a
+// unit normal, unnormalised: the shading model's matrix absorbs the constants.
+Eigen::RowVectorXd sh_basis(const Eigen::Vector3d& n, int k) {
+  const double x = n.x(), y = n.y(), z = n.z();
+  Eigen::RowVectorXd b(k);
+  b.head<9>() << 1, x, y, z, x * y, x * z, y * z, x * x - y * y, 3 * z * z - 1;
+  if (k == 16)
+    b.tail<7>() << y * (3 * x * x - y * y), x * y * z, y * (5 * z * z - 1), z * (5 * z * z - 3),
+        x * (5 * z * z - 1), z * (x * x - y * y), x * (x * x - 3 * y * y);
+  return b;
+}
+
+// The photometric arbiter between the fit's and the prior's normal of each
+// pixel. Shading model S̃ ≈ ρ Y(n) B (Y: sh_basis, ρ = |S̃ A|, B k×k). A
+// normal's cost is the pixel's residual in image space within the rank-k
+// subspace, min over ρ ≥ 0 of ‖(S̃ᵢ − ρ Y(n) B) Σ^½‖².
+class ShadingModel {
+ public:
+  // B by least squares over the rows whose `normals` row is nonzero.
+  ShadingModel(const RowMatrix& S, const RowMatrix& normals, const Eigen::VectorXd& rho,
+               const Eigen::VectorXd& sigma)
+      : S_(S), w_(sigma.cwiseSqrt().transpose()) {
+    const Eigen::Index k = S.cols();
+    Eigen::MatrixXd model(S.rows(), k), target(S.rows(), k);
+    Eigen::Index rows = 0;
+    for (Eigen::Index i = 0; i < S.rows(); ++i) {
+      if (normals.row(i).isZero() || !(rho[i] > 0)) continue;
+      model.row(rows) = rho[i] * sh_basis(normals.row(i).transpose(), static_cast<int>(k));
+      target.row(rows++) = S.row(i);
+    }
+    fitted_ = rows >= k;
+    if (fitted_) B_ = model.topRows(rows).colPivHouseholderQr().solve(target.topRows(rows));
+  }
+
+  // Fewer rows than k leave B undetermined: such a model judges nothing.
+  bool fitted() const { return fitted_; }
+
+  double cost(Eigen::Index i, const Eigen::Vector3d& n) const {
+    const Eigen::RowVectorXd observed = S_.row(i).cwiseProduct(w_);
+    const Eigen::RowVectorXd predicted = (sh_basis(n, static_cast<int>(S_.cols())) * B_).cwiseProduct(w_);
+    const double t = observed.dot(predicted), len2 = predicted.squaredNorm();
+    return observed.squaredNorm() - (t > 0 && len2 > 0 ? t * t / len2 : 0.0);
+  }
+
+ private:
+  const RowMatrix& S_;
+  Eigen::RowVectorXd w_;
+  Eigen::MatrixXd B_;
+  bool fitted_ = false;
+};
+
+struct PhotometricCosts {
+  std::vector<double> fit, prior;  // per row; prior < 0 where the pixel has no prior
+  bool model_from_prior = false;   // which normals the shading model was fitted to
+};
+
+// Two shading models, one fitted to the fit's normals and one to the prior's;
+// the one whose own normals explain the images better (lower total cost over
+// the pixels that have both) judges every pixel, so that the arbiter neither
+// favours the fit it is to judge nor trusts a prior that explains nothing.
+PhotometricCosts photometric_costs(const RowMatrix& S, const Eigen::MatrixXd& A, const RowMatrix& N,
+                                   const Eigen::VectorXd& sigma) {
+  const Eigen::Index p = S.rows();
+  const RowMatrix SA = S * A;
+  const Eigen::VectorXd rho = SA.rowwise().norm();
+  RowMatrix F = RowMatrix::Zero(p, 3);
+  for (Eigen::Index i = 0; i < p; ++i)
+    if (rho[i] > 0 && std::isfinite(rho[i])) F.row(i) = SA.row(i) / rho[i];
+  const ShadingModel from_fit(S, F, rho, sigma), from_prior(S, N, rho, sigma);
+  double total_fit = 0, total_prior = 0;
+  for (Eigen::Index i = 0; i < p; ++i) {
+    if (F.row(i).isZero() || N.row(i).isZero() || !from_fit.fitted() || !from_prior.fitted()) continue;
+    total_fit += from_fit.cost(i, F.row(i).transpose());
+    total_prior += from_prior.cost(i, N.row(i).transpose());
+  }
+  PhotometricCosts out{std::vector<double>(static_cast<std::size_t>(p), 0.0),
+                       std::vector<double>(static_cast<std::size_t>(p), -1.0),
+                       from_prior.fitted() && (!from_fit.fitted() || total_prior <= total_fit)};
+  const ShadingModel& judge = out.model_from_prior ? from_prior : from_fit;
+  if (!judge.fitted()) return out;  // no judge: nothing is kept
+  for (Eigen::Index i = 0; i < p; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    if (!F.row(i).isZero()) out.fit[u] = judge.cost(i, F.row(i).transpose());
+    if (!N.row(i).isZero()) out.prior[u] = judge.cost(i, N.row(i).transpose());
+  }
+  return out;
+}
+
+double median(std::vector<double> values) {
+  if (values.empty()) return 0;
+  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
+
 }  // namespace
 
 void ShapePriorOptions::check() const {
@@ -59,6 +154,9 @@ void ShapePriorOptions::check() const {
   if (refine_pixels < 100) fail("shape-prior: refine_pixels must be at least 100, got {}", refine_pixels);
   if (!(min_prior_fraction >= 0 && min_prior_fraction <= 1))
     fail("shape-prior: min_prior_fraction must be in [0, 1], got {}", min_prior_fraction);
+  if (!(keep_prior_margin >= 0 && keep_prior_margin <= 10))
+    fail("shape-prior: keep-prior margin (--keep-prior-margin) must be in [0, 10], got {}",
+         keep_prior_margin);
 }
 
 nlohmann::json ShapePriorOptions::to_json() const {
@@ -67,7 +165,9 @@ nlohmann::json ShapePriorOptions::to_json() const {
           {"refine", refine},
           {"max_evaluations", max_evaluations},
           {"refine_pixels", refine_pixels},
-          {"min_prior_fraction", min_prior_fraction}};
+          {"min_prior_fraction", min_prior_fraction},
+          {"keep_prior", keep_prior},
+          {"keep_prior_margin", keep_prior_margin}};
 }
 
 SolveResult solve_shape_prior(const Observations& obs, const cv::Mat& prior_normals,
@@ -195,7 +295,25 @@ SolveResult solve_shape_prior(const Observations& obs, const cv::Mat& prior_norm
     }
   }
 
-  // 4. N* = O(S̃ A*); the rank-k reconstruction error as the residual.
+  // Step 5 (the header), decided before the output: the pixels whose prior
+  // normal the fit does not beat photometrically by more than the margin.
+  std::vector<bool> keep(static_cast<std::size_t>(p), false);
+  std::size_t kept = 0;
+  double margin = 0;
+  bool model_from_prior = false;
+  if (options.keep_prior) {
+    const PhotometricCosts costs = photometric_costs(S, A, N, sigma);
+    model_from_prior = costs.model_from_prior;
+    margin = options.keep_prior_margin * median(costs.fit);
+    for (std::size_t i = 0; i < keep.size(); ++i)
+      if (costs.prior[i] >= 0 && costs.prior[i] <= costs.fit[i] + margin) {
+        keep[i] = true;
+        ++kept;
+      }
+  }
+
+  // 4. N* = O(S̃ A*), or the prior's normal where step 5 keeps it; the rank-k
+  //    reconstruction error as the residual.
   const Eigen::MatrixXd lighting =
       sigma.cwiseSqrt().asDiagonal() * vk.transpose();  // k × q: I ≈ S̃ · lighting
   SolveResult result;
@@ -212,7 +330,7 @@ SolveResult solve_shape_prior(const Observations& obs, const cv::Mat& prior_norm
       ++degenerate;
       continue;
     }
-    const Eigen::RowVector3d n = m / len;
+    const Eigen::RowVector3d n = keep[static_cast<std::size_t>(i)] ? Eigen::RowVector3d(N.row(i)) : m / len;
     result.normals.at<cv::Vec3f>(px) =
         cv::Vec3f(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
     result.albedo.at<float>(px) = static_cast<float>(len);
@@ -228,6 +346,11 @@ SolveResult solve_shape_prior(const Observations& obs, const cv::Mat& prior_norm
   result.parameters["fit"] = {{"prior_pixels", with_prior},  {"fit_pixels", rows.size()},
                               {"cost_linear", initial_cost}, {"cost_refined", final_cost},
                               {"evaluations", evaluations},  {"singular_values", singular}};
+  const double kept_fraction = static_cast<double>(kept) / static_cast<double>(p);
+  result.parameters["kept_prior"] = {{"pixels", kept},
+                                     {"fraction", kept_fraction},
+                                     {"cost_margin", margin},
+                                     {"shading_model", model_from_prior ? "prior" : "fit"}};
   auto& s = result.summary;
   s.method = "shape-prior";
   s.pixels_in_mask = static_cast<std::size_t>(p);
@@ -239,6 +362,10 @@ SolveResult solve_shape_prior(const Observations& obs, const cv::Mat& prior_norm
                  {{"linear", initial_cost}, {"refined", final_cost}, {"evaluations", evaluations}},
                  fmt::format("prior fit cost {:.4g} (linear) -> {:.4g} (refined, {} evaluations)",
                              initial_cost, final_cost, evaluations)}};
+  if (options.keep_prior)
+    s.findings.push_back({"kept_prior",
+                          {{"pixels", kept}, {"fraction", kept_fraction}},
+                          fmt::format("prior's normal kept at {:.1f}% of pixels", 100 * kept_fraction)});
   s.message = s.format_message();
   return result;
 }

@@ -15,8 +15,6 @@
 namespace lightstage {
 namespace {
 
-// The confidence band: residuals within this fraction of the median value count as explained.
-constexpr double kInlierBand = 0.05;
 // SBL stops when no error variance γ_j moved by more than this × (median value)².
 constexpr double kGammaTolerance = 1e-8;
 
@@ -42,23 +40,20 @@ double select_lit(const PixelObservations& pixel, double shadow_threshold, Works
   return *mid;
 }
 
-// Normal, albedo, RMS residual and the explained fraction of the kept observations.
-void finish(const PixelObservations& pixel, const Workspace& ws, const Eigen::Vector3d& s, double scale,
+// Normal, albedo and RMS residual over the kept observations.
+void finish(const PixelObservations& pixel, const Workspace& ws, const Eigen::Vector3d& s,
             detail::PixelOutcome& out, int iterations) {
   if (!s.allFinite() || s.norm() < 1e-12) return;
   double squared = 0;
-  std::size_t inside = 0;
   for (const Eigen::Index j : ws.kept) {
     const double r = pixel.lights.row(j).dot(s) - pixel.values(j);
     squared += r * r;
-    if (std::abs(r) < kInlierBand * scale) ++inside;
   }
   const auto n = static_cast<double>(ws.kept.size());
   out.status = detail::PixelOutcome::Status::kSolved;
   out.normal = s;
   out.albedo = s.norm();
   out.residual = std::sqrt(squared / n);
-  out.confidence = static_cast<double>(inside) / n;
   out.iterations = iterations;
 }
 
@@ -85,7 +80,7 @@ void l1_pixel(const PixelObservations& pixel, const L1Options& options, Workspac
     s = next;
     if (change < 1e-10 * std::max(s.norm(), 1e-12)) break;
   }
-  finish(pixel, ws, s, scale, out, it);
+  finish(pixel, ws, s, out, it);
 }
 
 // EM for the sparse errors' variances γ (Tipping; Wipf & Rao), s integrated
@@ -141,7 +136,7 @@ void sbl_pixel(const PixelObservations& pixel, const SblOptions& options, Worksp
     s = next;
     if (change < kGammaTolerance * scale * scale) break;
   }
-  finish(pixel, ws, s, scale, out, it);
+  finish(pixel, ws, s, out, it);
 }
 
 template <typename Options, typename Core>

@@ -13,6 +13,8 @@
 // population: each mask pixel's darkest observations and, when the stack has
 // a mask, the background pixels outside it in every frame (a surface that is
 // not the object reads what the camera reads without the object's shading).
+// Without a background, shadows clipped at zero (no black level) give the
+// noise through the small values that pair with their exact zeros.
 // Where the stack subtracted dark frames or a black level the source says so:
 // the level then starts from zero by construction and the spread is what is
 // left to estimate.

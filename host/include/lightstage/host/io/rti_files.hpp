@@ -23,6 +23,16 @@ struct RtiImage {
   std::array<Eigen::MatrixXf, 3> channels;
 };
 
+// One colour per pixel and one luminance model, channel c ≈ lum · rgb(c)
+// (PTM_FORMAT_LRGB, relight's lrgb): rgb is each channel's share at the light
+// overhead with the brightest channel at 1, and lum carries the rest. Exact
+// where a pixel's chromaticity does not change with the light.
+struct LrgbSplit {
+  Eigen::MatrixXf lum;   // pixels × terms
+  Eigen::MatrixX3f rgb;  // pixels × 3, in [0, 1]
+};
+LrgbSplit split_lrgb(const RtiImage& image);
+
 enum class PtmFormat { lrgb, rgb };
 
 // PTM_FORMAT_LRGB stores one luminance polynomial and a colour per pixel: the

@@ -11,6 +11,9 @@
 //   albedo.exr      float albedo, channel Y
 //   summary.json    method, parameters, summary fields, time, input, software version
 //   confidence.pfm  when the method gives one: float confidence in [0, 1]
+//                   (normal_confidence.hpp: 1 / (1 + predicted error / scale))
+//   method_map.png  when the method chooses per pixel (auto): one colour per choice,
+//                   legend and pixel counts in summary.json method_map
 //   brdf_*.pfm      when the method fits a per-pixel reflectance: one float map per
 //                   coefficient, listed in summary.json files.brdf, described by "reflectance"
 

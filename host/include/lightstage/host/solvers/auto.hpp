@@ -20,7 +20,8 @@
 //     construction (it maximises monotonicity), including where it is wrong
 //     (lights in a cone, Oren–Nayar, noise).
 // The BRDF written is the biquadratic layout (a bilinear winner's
-// coefficients fill its C_00, C_01, C_10, C_11). confidence: 1 − d / 10°.
+// coefficients fill its C_00, C_01, C_10, C_11); SolveResult::choice says
+// which answer each pixel took.
 
 #include "lightstage/host/radiometry.hpp"
 #include "lightstage/host/solvers/bipolynomial.hpp"

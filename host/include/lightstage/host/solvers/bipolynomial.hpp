@@ -13,7 +13,7 @@
 //     linear least squares and normalise it. The best iterate is kept.
 // Outputs beyond the normal: the coefficients C (reflectance/bipolynomial_model.hpp),
 // albedo = mean of ρ over the kept observations (the Lambertian albedo for a
-// Lambertian surface), the RMS residual, and confidence = 1 − RMS / mean kept value.
+// Lambertian surface) and the RMS residual.
 
 #include "lightstage/host/radiometry.hpp"
 #include "lightstage/host/solvers/incidence_falloff.hpp"

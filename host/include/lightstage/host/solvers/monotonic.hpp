@@ -20,8 +20,7 @@
 //     descends while δ stays within (1 + plateau_tolerance) × δ_min, the noise
 //     level of the best hypothesis (docs/solvers.md has the measurements).
 // Outputs: normal, albedo = median of i_j / (n·l_j) over lit observations,
-// residual = δ at the answer (in y'^γ units), confidence = the fraction of
-// consecutive pairs (sorted by n·h) whose profile i/(n·l) does not decrease.
+// residual = δ at the answer (in y'^γ units).
 
 #include "lightstage/host/radiometry.hpp"
 #include "lightstage/host/solvers/pixel_observations.hpp"

@@ -65,9 +65,13 @@ struct SolveResult {
   cv::Mat residual;  // CV_32FC1, RMS of the fit over the observations used, zero where not solved
   cv::Mat solved;    // CV_8UC1, 255 where solved
   // Optional per-pixel outputs (empty when a method does not produce them):
-  cv::Mat confidence;                    // CV_32FC1 in [0, 1], 1 = the data fit the method's model well
-  cv::Mat coefficients;                  // CV_32FC(k), a per-pixel reflectance model (see `reflectance`)
+  cv::Mat confidence;    // CV_32FC1 in [0, 1] from the predicted error (normal_confidence.hpp; solve_with)
+  cv::Mat coefficients;  // CV_32FC(k), a per-pixel reflectance model (see `reflectance`)
   nlohmann::json reflectance = nullptr;  // describes `coefficients` (model, order, term order)
+  // Methods that choose per pixel (auto): CV_8UC1, 0 where not solved, k where
+  // the pixel took choices[k - 1]. Written as method_map.png with counts.
+  cv::Mat choice;
+  std::vector<std::string> choices;
   nlohmann::json parameters = nlohmann::json::object();  // the options used, for summary.json
   SolveSummary summary;
 };

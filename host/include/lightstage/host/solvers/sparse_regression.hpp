@@ -9,8 +9,7 @@
 //  - sbl: sparse Bayesian learning: e_j ~ N(0, γ_j), noise N(0, λ), s with a
 //         flat prior; γ is learned by EM on the marginal likelihood (the
 //         hyper-parameters of the errors the model needs go to zero).
-// Outputs: normal, albedo |s|, RMS residual over the kept observations,
-// confidence = fraction of them within 5% of the median value of the fit.
+// Outputs: normal, albedo |s|, RMS residual over the kept observations.
 
 #include "lightstage/host/radiometry.hpp"
 #include "lightstage/host/solvers/solve_result.hpp"

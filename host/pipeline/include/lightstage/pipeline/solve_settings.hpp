@@ -52,7 +52,7 @@ struct SolveSettings {
   std::string falloff = "auto";  // bi-polynomial and auto: "auto" or kappa (incidence_falloff.hpp)
   RadiometryOptions radiometry;
   bool no_clamp = false;
-  bool no_shadow_screen = false;  // robust: RobustOptions::screen_cast_shadows off
+  bool shadow_screen = false;  // robust: RobustOptions::screen_cast_shadows
 
   // Copies the shared settings into the methods' options and checks the
   // chosen method's (a bad value fails before any input is read, naming its
