@@ -2,6 +2,7 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
+#include "lightstage/host/reflectance/relighting_fit.hpp"
 #include "lightstage/host/solvers/normal_confidence.hpp"
 #include "lightstage/pipeline/shape_prior_method.hpp"
 #include "lightstage/pipeline/solve_checks.hpp"
@@ -128,6 +129,18 @@ SolveResult solve_with(const Observations& observations, const SolveSettings& se
     result.confidence = confidence_from_error(predict_normal_error(observations, result, confidence),
                                               result.solved, confidence.scale_deg);
     result.parameters["confidence"] = confidence.to_json();
+  }
+  // A per-pixel BRDF is refitted to every lit observation at the answer's
+  // normal, for relighting (reflectance/relighting_fit.hpp).
+  if (!result.coefficients.empty() && result.reflectance.is_object() &&
+      result.reflectance.value("model", "") == "bipolynomial") {
+    RelightingFitOptions refit;
+    refit.order = result.reflectance.at("order").get<int>();
+    refit.shadow_threshold = std::max(0.0, used.value);
+    refit.threads = settings.threads.value_or(0);
+    const RelightingFit fitted = fit_relighting_brdf(observations, result.normals, result.solved, refit);
+    result.coefficients = fitted.coefficients;
+    result.reflectance["fit"] = fitted.to_json();
   }
   return result;
 }

@@ -1,0 +1,203 @@
+// The relighting BRDF refit (reflectance/relighting_fit.hpp): exact on data
+// the model can represent, better than a bi-polynomial solve's own T_low
+// coefficients at lights it never saw, and a prior weight chosen from the data.
+#include "lightstage/host/reflectance/relighting_fit.hpp"
+#include "lightstage/common/error.hpp"
+#include "lightstage/host/reflectance/bipolynomial_model.hpp"
+#include "lightstage/host/solvers/bipolynomial.hpp"
+#include "reflectance_scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace lightstage {
+namespace {
+
+using testing::grid_normal;
+using testing::hemisphere_lights;
+
+Observations with_lights(const Observations& all, const std::vector<int>& keep) {
+  Observations out = all;
+  out.lights.resize(static_cast<Eigen::Index>(keep.size()), 3);
+  out.intensities.resize(all.intensities.rows(), static_cast<Eigen::Index>(keep.size()));
+  out.saturated.resize(all.saturated.rows(), static_cast<Eigen::Index>(keep.size()));
+  for (std::size_t k = 0; k < keep.size(); ++k) {
+    const auto c = static_cast<Eigen::Index>(k);
+    out.lights.row(c) = all.lights.row(keep[k]);
+    out.intensities.col(c) = all.intensities.col(keep[k]);
+    out.saturated.col(c) = all.saturated.col(keep[k]);
+  }
+  return out;
+}
+
+// ‖relit − photo‖ / ‖photo‖ over every pixel at the lights `held`, relit as
+// `relight` renders: max(ρ(n·h, l·h), 0) · max(n·l, 0).
+double held_out_error(const Observations& all, const std::vector<int>& held, const cv::Mat& normals,
+                      const cv::Mat& coefficients, int order) {
+  const int terms = bipolynomial_term_count(order);
+  double error = 0, energy = 0;
+  for (std::size_t p = 0; p < all.pixel_count(); ++p) {
+    const cv::Point& at = all.pixels[p];
+    const cv::Vec3f v = normals.at<cv::Vec3f>(at);
+    const Vec3 n = Vec3(v[0], v[1], v[2]).normalized();
+    const float* row = coefficients.ptr<float>(at.y) + static_cast<std::ptrdiff_t>(at.x) * terms;
+    Eigen::VectorXd c(terms);
+    for (int t = 0; t < terms; ++t) c(t) = row[t];
+    for (const int j : held) {
+      const Vec3 l = all.lights.row(j).transpose().normalized();
+      const double relit = std::max(evaluate_bipolynomial(order, c, n, l), 0.0) * std::max(n.dot(l), 0.0);
+      const double photo = all.intensities(static_cast<Eigen::Index>(p), j);
+      error += (relit - photo) * (relit - photo);
+      energy += photo * photo;
+    }
+  }
+  return std::sqrt(error / energy);
+}
+
+cv::Mat all_solved(cv::Size size) { return cv::Mat(size, CV_8UC1, cv::Scalar::all(255)); }
+
+void split_lights(int count, int every, std::vector<int>& fit, std::vector<int>& held) {
+  for (int j = 0; j < count; ++j) (j % every == 3 % every ? held : fit).push_back(j);
+}
+
+// Two materials with different biquadratic BRDFs (left and right halves), so
+// that the object prior is wrong for both and only λ = 0 is exact.
+testing::ReflectanceScene biquadratic_scene(const Eigen::MatrixX3d& lights, cv::Size size,
+                                            const Eigen::VectorXd& left, const Eigen::VectorXd& right) {
+  testing::ReflectanceScene scene;
+  Observations& obs = scene.observations;
+  obs.size = size;
+  obs.mask = cv::Mat(size, CV_8UC1, cv::Scalar::all(255));
+  obs.lights = lights;
+  obs.intensities.resize(size.area(), lights.rows());
+  obs.saturated = FlagMatrix::Constant(size.area(), lights.rows(), false);
+  scene.truth = cv::Mat(size, CV_32FC3);
+  for (int y = 0; y < size.height; ++y) {
+    for (int x = 0; x < size.width; ++x) {
+      const auto p = static_cast<Eigen::Index>(obs.pixels.size());
+      obs.pixels.emplace_back(x, y);
+      const Vec3 n = grid_normal(x, y, size.width, size.height);
+      scene.truth.at<cv::Vec3f>(y, x) =
+          cv::Vec3f(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
+      const double albedo = 0.3 + 0.5 * (x + y) / static_cast<double>(size.width + size.height);
+      const Eigen::VectorXd& c = x < size.width / 2 ? left : right;
+      for (Eigen::Index j = 0; j < lights.rows(); ++j) {
+        const Vec3 l = lights.row(j).transpose();
+        obs.intensities(p, j) =
+            static_cast<float>(albedo * evaluate_bipolynomial(2, c, n, l) * std::max(n.dot(l), 0.0));
+      }
+    }
+  }
+  return scene;
+}
+
+TEST(RelightingFit, RecoversBiquadraticReflectanceExactly) {
+  Eigen::VectorXd left(9), right(9);
+  left << 0.9, 0.0, 0.1, 0.2, 0.0, 0.0, 0.3, 0.0, 0.0;
+  right << 0.6, 0.1, 0.0, -0.2, 0.1, 0.0, 0.8, -0.1, 0.0;
+  const Eigen::MatrixX3d lights = hemisphere_lights(60, 7, 0.2);
+  const auto scene = biquadratic_scene(lights, cv::Size(16, 10), left, right);
+  RelightingFitOptions options;
+  options.order = 2;
+  const RelightingFit fit =
+      fit_relighting_brdf(scene.observations, scene.truth, all_solved(scene.observations.size), options);
+  EXPECT_EQ(fit.pixels, 160u);
+  // Only λ = 0 is exact on two materials: the validation must find it.
+  EXPECT_LE(fit.lambda, 1e-3);
+  ASSERT_FALSE(fit.validation.empty());
+  EXPECT_LT(fit.validation.front().second, 1e-4);
+  EXPECT_GT(fit.validation.back().second, 10 * fit.validation.front().second);
+  std::vector<int> every(static_cast<std::size_t>(lights.rows()));
+  for (int j = 0; j < lights.rows(); ++j) every[static_cast<std::size_t>(j)] = j;
+  EXPECT_LT(held_out_error(scene.observations, every, scene.truth, fit.coefficients, 2), 1e-3);
+}
+
+// A Cook–Torrance material with noise: a bi-polynomial solve's T_low
+// coefficients relight lights it did not see badly (they never saw the
+// highlight); the refit at its normals relights them well.
+TEST(RelightingFit, PredictsUnseenLightsFarBetterThanTheSolversOwnCoefficients) {
+  const Eigen::MatrixX3d lights = hemisphere_lights(96, 11, 0.15);
+  const auto scene =
+      testing::make_reflectance_scene("cook-torrance:roughness=0.3,ks=0.4", lights, 24, 16, 0.02, 5);
+  std::vector<int> fit_lights, held;
+  split_lights(96, 8, fit_lights, held);
+  const Observations fit_obs = with_lights(scene.observations, fit_lights);
+  BiPolynomialOptions solver;
+  solver.order = 2;
+  solver.shadow_threshold = 1e-3;
+  const SolveResult solved = solve_bipolynomial(fit_obs, solver);
+  RelightingFitOptions options;
+  options.order = 2;
+  options.shadow_threshold = solver.shadow_threshold;
+  const RelightingFit refit = fit_relighting_brdf(fit_obs, solved.normals, solved.solved, options);
+  const double own = held_out_error(scene.observations, held, solved.normals, solved.coefficients, 2);
+  const double refitted = held_out_error(scene.observations, held, solved.normals, refit.coefficients, 2);
+  RecordProperty("own_coefficients", std::to_string(own));
+  RecordProperty("refitted", std::to_string(refitted));
+  EXPECT_LT(refitted, 0.5 * own) << "own " << own << ", refitted " << refitted;
+  EXPECT_LT(refitted, 0.08) << "own " << own;
+}
+
+// Twelve lights, noisy, two materials: few observations per term, so the
+// prior must carry weight, and the chosen weight must beat none on lights
+// the fit never saw.
+TEST(RelightingFit, FewLightsLeanOnTheObjectBrdf) {
+  Eigen::VectorXd left(9), right(9);
+  left << 0.9, 0.0, 0.1, 0.2, 0.0, 0.0, 0.3, 0.0, 0.0;
+  right << 0.8, 0.1, 0.0, -0.1, 0.1, 0.0, 0.4, -0.1, 0.0;
+  const Eigen::MatrixX3d lights = hemisphere_lights(24, 5, 0.3);
+  auto scene = biquadratic_scene(lights, cv::Size(20, 12), left, right);
+  std::mt19937 rng(9);
+  std::normal_distribution<float> noise(0.f, 0.02f);
+  for (Eigen::Index i = 0; i < scene.observations.intensities.size(); ++i)
+    scene.observations.intensities.data()[i] =
+        std::max(0.f, scene.observations.intensities.data()[i] + noise(rng));
+  std::vector<int> fit_lights, held;
+  split_lights(24, 2, fit_lights, held);
+  const Observations fit_obs = with_lights(scene.observations, fit_lights);
+  RelightingFitOptions options;
+  options.order = 2;
+  options.shadow_threshold = 0.01;
+  const RelightingFit chosen = fit_relighting_brdf(fit_obs, scene.truth, all_solved(fit_obs.size), options);
+  options.lambda = 0;
+  const RelightingFit none = fit_relighting_brdf(fit_obs, scene.truth, all_solved(fit_obs.size), options);
+  EXPECT_GT(chosen.lambda, 0);
+  const double e_chosen = held_out_error(scene.observations, held, scene.truth, chosen.coefficients, 2);
+  const double e_none = held_out_error(scene.observations, held, scene.truth, none.coefficients, 2);
+  RecordProperty("chosen", std::to_string(e_chosen));
+  RecordProperty("none", std::to_string(e_none));
+  EXPECT_LT(e_chosen, 0.9 * e_none) << "λ " << chosen.lambda;
+}
+
+TEST(RelightingFit, BadOptionsAndMapsAreNamed) {
+  const Eigen::MatrixX3d lights = hemisphere_lights(20, 3, 0.2);
+  const auto scene = testing::make_reflectance_scene("lambert", lights, 6, 4);
+  const cv::Mat solved = all_solved(scene.observations.size);
+  RelightingFitOptions options;
+  options.folds = 1;
+  EXPECT_THROW(
+      {
+        try {
+          fit_relighting_brdf(scene.observations, scene.truth, solved, options);
+        } catch (const InputError& e) {
+          EXPECT_NE(std::string(e.what()).find("folds"), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      InputError);
+  options = {};
+  options.order = 4;
+  EXPECT_THROW(fit_relighting_brdf(scene.observations, scene.truth, solved, options), InputError);
+  options = {};
+  options.lambda = -1;
+  EXPECT_THROW(fit_relighting_brdf(scene.observations, scene.truth, solved, options), InputError);
+  options = {};
+  EXPECT_THROW(fit_relighting_brdf(scene.observations, scene.truth, cv::Mat(2, 2, CV_8UC1), options),
+               InputError);
+}
+
+}  // namespace
+}  // namespace lightstage
