@@ -25,20 +25,30 @@ TEST(RtiHoldout, BallMatchesThePublishedRtiFigures) {
 }
 
 // Issue 20: a solve's reflectance relights held-out lights better than the
-// per-pixel RTI fits (relighting_fit.hpp; 1.257 before the refit).
+// per-pixel RTI fits (relighting_fit.hpp; 1.257 before the refit, 0.1888
+// with the polynomial alone, 0.1503 with the specular lobe). Twelve full
+// solves of the ball: measured in the optimised flavour only, the fit's code
+// runs under the sanitizers in test_host_relighting_fit.
 class RtiHoldoutMethod : public ::testing::TestWithParam<const char*> {};
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kSanitized = true;
+#else
+constexpr bool kSanitized = false;
+#endif
 
 TEST_P(RtiHoldoutMethod, BallRelightsBetterThanPtmAndHsh) {
   const auto ball = testing::shared_data_dir() / "diligent/ballPNG";
   if (testing::shared_data_dir().empty() || !std::filesystem::exists(ball))
     GTEST_SKIP() << "no DiLiGenT ball";
+  if (kSanitized) GTEST_SKIP() << "twelve solves of the ball: the release flavour measures them";
   const std::string method = GetParam();
   const auto r = pipeline::rti_holdout({.input = ball, .held_out = 12, .methods = {method}});
   const double e = r["models"][method]["relative_rmse"].get<double>();
   RecordProperty("relative_rmse", std::to_string(e));
   for (const char* model : {"ptm", "hsh2", "hsh3"})
     EXPECT_LT(e, r["models"][model]["relative_rmse"].get<double>()) << method << " against " << model;
-  EXPECT_LT(e, 0.192) << method;  // measured 0.1888
+  EXPECT_LT(e, 0.155) << method;  // measured 0.1503
 }
 
 INSTANTIATE_TEST_SUITE_P(SolveMethods, RtiHoldoutMethod, ::testing::Values("biquadratic", "auto"));

@@ -141,6 +141,10 @@ SolveResult solve_with(const Observations& observations, const SolveSettings& se
     const RelightingFit fitted = fit_relighting_brdf(observations, result.normals, result.solved, refit);
     result.coefficients = fitted.coefficients;
     result.reflectance["fit"] = fitted.to_json();
+    if (fitted.lobe_width > 0) {
+      result.reflectance["specular"] = {{"lobe", "beckmann"}, {"width", fitted.lobe_width}, {"term", "S"}};
+      result.reflectance["terms"].push_back("S");
+    }
   }
   return result;
 }

@@ -186,10 +186,20 @@ void read_reflectance(SolveFolder& folder) {
   const int order = reflectance->value("order", 0);
   if (order < 1 || order > 3)
     fail("{}: reflectance.order must be 1, 2 or 3 for a bi-polynomial, got {}", summary_path.string(), order);
+  double lobe_width = 0;
+  if (const auto specular = reflectance->find("specular");
+      specular != reflectance->end() && !specular->is_null()) {
+    const auto width = specular->is_object() ? specular->find("width") : specular->end();
+    if (width == specular->end() || !width->is_number() ||
+        !(width->get<double>() > 0 && width->get<double>() <= 1))
+      fail("{}: reflectance.specular.width must be a number in (0, 1]", summary_path.string());
+    lobe_width = width->get<double>();
+  }
   const auto& names = (*files)["brdf"];
-  const int terms = bipolynomial_term_count(order);
+  const int terms = bipolynomial_term_count(order) + (lobe_width > 0 ? 1 : 0);
   if (!names.is_array() || static_cast<int>(names.size()) != terms)
-    fail("{}: files.brdf must list {} coefficient maps for order {}", summary_path.string(), terms, order);
+    fail("{}: files.brdf must list {} coefficient maps for order {}{}", summary_path.string(), terms, order,
+         lobe_width > 0 ? " and a specular lobe" : "");
   std::vector<cv::Mat> planes;
   for (const auto& name : names) {
     if (!name.is_string()) fail("{}: files.brdf must list file names", summary_path.string());
@@ -197,6 +207,7 @@ void read_reflectance(SolveFolder& folder) {
   }
   cv::merge(planes, folder.coefficients);
   folder.reflectance_order = order;
+  folder.lobe_width = lobe_width;
 }
 
 }  // namespace

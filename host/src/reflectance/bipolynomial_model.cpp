@@ -4,6 +4,9 @@
 
 #include <Eigen/SVD>
 
+#include <algorithm>
+#include <cmath>
+
 #include <fmt/format.h>
 
 namespace lightstage {
@@ -44,6 +47,25 @@ double evaluate_bipolynomial(int order, const Eigen::Ref<const Eigen::VectorXd>&
                              const Vec3& l, const Vec3& v) {
   const Vec3 h = (l + v).normalized();
   return evaluate_bipolynomial(order, coefficients, n.dot(h), l.dot(h));
+}
+
+double specular_lobe(double n_dot_h, double roughness) {
+  if (!(n_dot_h > 0) || !(roughness > 0)) return 0;
+  const double c = std::min(n_dot_h, 1.0), c2 = c * c;
+  return std::exp(-(1 - c2) / (c2 * roughness * roughness)) / (c2 * c2);
+}
+
+double evaluate_relighting_brdf(int order, double lobe_roughness, const float* coefficients, double n_dot_h,
+                                double l_dot_h) {
+  const int n = order + 1;
+  double rho = 0;
+  for (int i = n - 1; i >= 0; --i) {
+    double row = 0;
+    for (int j = n - 1; j >= 0; --j) row = row * l_dot_h + coefficients[i * n + j];
+    rho = rho * n_dot_h + row;
+  }
+  if (lobe_roughness > 0) rho += coefficients[n * n] * specular_lobe(n_dot_h, lobe_roughness);
+  return std::max(rho, 0.0);
 }
 
 std::vector<std::string> bipolynomial_term_names(int order) {

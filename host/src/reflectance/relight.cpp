@@ -15,6 +15,7 @@ RelightModel relight_model(const io::SolveFolder& folder) {
       folder.albedo.empty() ? cv::Mat(folder.normals.size(), CV_32FC1, cv::Scalar::all(1)) : folder.albedo;
   model.coefficients = folder.coefficients;
   model.order = folder.reflectance_order;
+  model.lobe_width = folder.lobe_width;
   return model;
 }
 
@@ -29,8 +30,7 @@ cv::Mat relight(const RelightModel& model, const Vec3& light_in, const Vec3& vie
   const Vec3 l = light_in.normalized();
   const Vec3 h = (l + view).normalized();
   cv::Mat out(model.normals.size(), CV_32FC1, cv::Scalar::all(0));
-  const int k = model.order > 0 ? bipolynomial_term_count(model.order) : 0;
-  Eigen::VectorXd c(std::max(k, 1));
+  const int k = model.order > 0 ? model.coefficients.channels() : 0;
   for (int y = 0; y < out.rows; ++y) {
     for (int x = 0; x < out.cols; ++x) {
       if (model.solved.at<std::uint8_t>(y, x) == 0) continue;
@@ -41,8 +41,7 @@ cv::Mat relight(const RelightModel& model, const Vec3& light_in, const Vec3& vie
       double rho;
       if (k > 0) {
         const float* row = model.coefficients.ptr<float>(y) + static_cast<std::ptrdiff_t>(x) * k;
-        for (int t = 0; t < k; ++t) c(t) = row[t];
-        rho = std::max(evaluate_bipolynomial(model.order, c, n.dot(h), l.dot(h)), 0.0);
+        rho = evaluate_relighting_brdf(model.order, model.lobe_width, row, n.dot(h), l.dot(h));
       } else {
         rho = model.albedo.at<float>(y, x);
       }

@@ -19,11 +19,16 @@ namespace {
 const std::vector<double> kDefaultLambdas = {0, 1e-3, 3e-3, 0.01, 0.03, 0.1, 0.3, 1, 3, 10, 100, 1000};
 // Keeps a system with undetermined terms solvable (λ = 0) without biasing it.
 constexpr double kWhisperRidge = 1e-10;
-// Pixels the object BRDF is fitted on at most (evenly spread).
-constexpr std::size_t kObjectBrdfPixels = 20000;
 
-// One pixel's observations in the relighting model's terms: the rows a light
-// in front of the normal gives, a_j = (n·l_j) b(x_j, y_j), and their values.
+// The model's terms: the bi-polynomial's, then the lobe's weight when lobe > 0.
+struct Model {
+  int order = 2;
+  double lobe = 0;  // the lobe's width m; 0 = none
+  int terms() const { return bipolynomial_term_count(order) + (lobe > 0 ? 1 : 0); }
+};
+
+// One pixel's observations in the model's terms: the rows a light in front
+// of the normal gives, a_j = (n·l_j) (b(x_j, y_j), D(n·h_j)), and their values.
 struct PixelRows {
   Eigen::MatrixXd design;  // rows × terms
   Eigen::VectorXd values;  // rows
@@ -33,17 +38,17 @@ struct PixelRows {
   int lit_rows = 0;
 };
 
-void pixel_rows(const Observations& observations, std::size_t p, const Eigen::Vector3d& n, int order,
+void pixel_rows(const Observations& observations, std::size_t p, const Eigen::Vector3d& n, const Model& model,
                 double threshold, PixelObservations& scratch, PixelRows& out) {
   load_pixel(observations, p, true, scratch);
-  const int terms = bipolynomial_term_count(order);
+  const int polynomial = bipolynomial_term_count(model.order);
   const Eigen::Index images = scratch.count();
-  out.design.resize(images, terms);
+  out.design.resize(images, model.terms());
   out.values.resize(images);
   out.image.clear();
   out.lit.clear();
   std::vector<double> ratios;
-  Eigen::VectorXd basis(terms);
+  Eigen::VectorXd basis(polynomial);
   Eigen::Index rows = 0;
   for (Eigen::Index j = 0; j < images; ++j) {
     if (!scratch.usable[static_cast<std::size_t>(j)]) continue;
@@ -51,8 +56,9 @@ void pixel_rows(const Observations& observations, std::size_t p, const Eigen::Ve
     const double shade = n.dot(l);
     if (!(shade > 0)) continue;
     const Eigen::Vector3d h = (l + Eigen::Vector3d::UnitZ()).normalized();
-    bipolynomial_basis(order, n.dot(h), l.dot(h), basis.data());
-    out.design.row(rows) = shade * basis.transpose();
+    bipolynomial_basis(model.order, n.dot(h), l.dot(h), basis.data());
+    out.design.row(rows).head(polynomial) = shade * basis.transpose();
+    if (model.lobe > 0) out.design(rows, polynomial) = shade * specular_lobe(n.dot(h), model.lobe);
     out.values(rows) = scratch.values(j);
     out.image.push_back(static_cast<int>(j));
     const bool lit = scratch.values(j) > threshold;
@@ -60,7 +66,7 @@ void pixel_rows(const Observations& observations, std::size_t p, const Eigen::Ve
     if (lit) ratios.push_back(scratch.values(j) / shade);
     ++rows;
   }
-  out.design.conservativeResize(rows, terms);
+  out.design.conservativeResize(rows, model.terms());
   out.values.conservativeResize(rows);
   out.lit_rows = static_cast<int>(ratios.size());
   out.lambert = 0;
@@ -71,40 +77,70 @@ void pixel_rows(const Observations& observations, std::size_t p, const Eigen::Ve
   }
 }
 
-// Normal equations of the lit rows whose image is not in `held_fold`
-// (-1 = none held): G = Σ a aᵀ, b = Σ a v.
-void lit_normal_equations(const PixelRows& rows, int folds, int held_fold, Eigen::MatrixXd& gram,
+bool held(const PixelRows& rows, Eigen::Index r, int folds, int fold) {
+  return fold >= 0 && rows.image[static_cast<std::size_t>(r)] % folds == fold;
+}
+
+// Normal equations of the lit rows outside `fold` (-1 = none held out): G = Σ a aᵀ, b = Σ a v.
+void lit_normal_equations(const PixelRows& rows, int folds, int fold, Eigen::MatrixXd& gram,
                           Eigen::VectorXd& rhs) {
   const Eigen::Index terms = rows.design.cols();
   gram.setZero(terms, terms);
   rhs.setZero(terms);
   for (Eigen::Index r = 0; r < rows.design.rows(); ++r) {
-    const auto u = static_cast<std::size_t>(r);
-    if (!rows.lit[u] || (held_fold >= 0 && rows.image[u] % folds == held_fold)) continue;
+    if (!rows.lit[static_cast<std::size_t>(r)] || held(rows, r, folds, fold)) continue;
     gram.noalias() += rows.design.row(r).transpose() * rows.design.row(r);
     rhs.noalias() += rows.design.row(r).transpose() * rows.values(r);
   }
 }
 
-// c = (G + λD)⁻¹ (b + λ D s g), s the pixel's least-squares scale of g.
+// The same per fold in one pass: gram[f] / rhs[f] over every lit row but
+// fold f's, gram[folds] / rhs[folds] over all of them.
+struct FoldEquations {
+  std::vector<Eigen::MatrixXd> gram;
+  std::vector<Eigen::VectorXd> rhs;
+};
+
+void fold_equations(const PixelRows& rows, int folds, FoldEquations& out) {
+  const Eigen::Index terms = rows.design.cols();
+  const auto all = static_cast<std::size_t>(folds);
+  out.gram.assign(all + 1, Eigen::MatrixXd::Zero(terms, terms));
+  out.rhs.assign(all + 1, Eigen::VectorXd::Zero(terms));
+  for (Eigen::Index r = 0; r < rows.design.rows(); ++r) {
+    if (!rows.lit[static_cast<std::size_t>(r)]) continue;
+    const auto f = static_cast<std::size_t>(rows.image[static_cast<std::size_t>(r)] % folds);
+    out.gram[f].noalias() += rows.design.row(r).transpose() * rows.design.row(r);
+    out.rhs[f].noalias() += rows.design.row(r).transpose() * rows.values(r);
+  }
+  for (std::size_t f = 0; f < all; ++f) {
+    out.gram[all] += out.gram[f];
+    out.rhs[all] += out.rhs[f];
+  }
+  for (std::size_t f = 0; f < all; ++f) {
+    out.gram[f] = out.gram[all] - out.gram[f];
+    out.rhs[f] = out.rhs[all] - out.rhs[f];
+  }
+}
+
+// c = (G + ΛD)⁻¹ (b + ΛD s g), s the pixel's least-squares scale of g; Λ per term.
 Eigen::VectorXd regularised_coefficients(const Eigen::MatrixXd& gram, const Eigen::VectorXd& rhs,
-                                         const Eigen::VectorXd& g, const Eigen::VectorXd& weights,
-                                         double lambda, double fallback_scale) {
+                                         const Eigen::VectorXd& g, const Eigen::VectorXd& penalty,
+                                         double fallback_scale) {
   const double gg = g.dot(gram * g);
   const double scale = gg > 0 ? std::max(0.0, g.dot(rhs) / gg) : fallback_scale;
   Eigen::MatrixXd system = gram;
-  system.diagonal() += lambda * weights;
+  system.diagonal() += penalty;
   system.diagonal().array() += kWhisperRidge * std::max(system.trace(), 1e-300);
-  const Eigen::VectorXd c = system.ldlt().solve(rhs + lambda * weights.cwiseProduct(scale * g));
+  const Eigen::VectorXd c = system.ldlt().solve(rhs + penalty.cwiseProduct(scale * g));
   return c.allFinite() ? c : Eigen::VectorXd(scale * g);
 }
 
-// Evenly spread pixel indices, at most `limit` of the solved ones.
-std::vector<std::size_t> sample_pixels(const std::vector<std::size_t>& solved, std::size_t limit) {
-  if (solved.size() <= limit) return solved;
+// Evenly spread, at most `limit` of `all`.
+std::vector<std::size_t> spread_sample(const std::vector<std::size_t>& all, std::size_t limit) {
+  if (all.size() <= limit) return all;
   std::vector<std::size_t> out;
   out.reserve(limit);
-  for (std::size_t i = 0; i < limit; ++i) out.push_back(solved[i * solved.size() / limit]);
+  for (std::size_t i = 0; i < limit; ++i) out.push_back(all[i * all.size() / limit]);
   return out;
 }
 
@@ -113,80 +149,92 @@ Eigen::Vector3d normal_at(const cv::Mat& normals, const cv::Point& at) {
   return Eigen::Vector3d(v[0], v[1], v[2]).normalized();
 }
 
-// Per fold (and, at index folds, for all lights): the object BRDF normal
-// equations of the lit rows outside the fold, values divided by the pixel's
-// Lambertian albedo; plus the weights D.
-struct ObjectSystems {
-  std::vector<Eigen::MatrixXd> gram;
-  std::vector<Eigen::VectorXd> rhs;
+// The sample's rows, made once per model.
+std::vector<PixelRows> sample_rows(const Observations& observations, const cv::Mat& normals,
+                                   const std::vector<std::size_t>& sample, const Model& model,
+                                   const RelightingFitOptions& options) {
+  std::vector<PixelRows> rows(sample.size());
+  parallel_chunks(sample.size(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    PixelObservations scratch;
+    for (std::size_t i = begin; i < end; ++i)
+      pixel_rows(observations, sample[i], normal_at(normals, observations.pixels[sample[i]]), model,
+                 options.shadow_threshold, scratch, rows[i]);
+  });
+  return rows;
+}
+
+// The object BRDF per fold (index folds: from every light): least squares of
+// the lit rows outside the fold, values over the pixel's Lambertian albedo;
+// and the weights D. Summed in sample order, so independent of threads.
+struct ObjectBrdf {
+  std::vector<Eigen::VectorXd> per_fold;  // folds + 1
   Eigen::VectorXd weights;
 };
 
-ObjectSystems object_systems(const Observations& observations, const cv::Mat& normals,
-                             const std::vector<std::size_t>& pixels, const RelightingFitOptions& options) {
-  const int terms = bipolynomial_term_count(options.order);
-  const int folds = options.folds;
-  struct Partial {
-    std::vector<Eigen::MatrixXd> gram;
-    std::vector<Eigen::VectorXd> rhs;
-    Eigen::VectorXd weights;
-    std::size_t pixels = 0;
-  };
-  std::vector<Partial> partial(static_cast<std::size_t>(resolve_threads(options.threads)));
-  parallel_chunks(pixels.size(), options.threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
-    Partial& mine = partial[chunk];
-    mine.gram.assign(static_cast<std::size_t>(folds + 1), Eigen::MatrixXd::Zero(terms, terms));
-    mine.rhs.assign(static_cast<std::size_t>(folds + 1), Eigen::VectorXd::Zero(terms));
-    mine.weights = Eigen::VectorXd::Zero(terms);
-    PixelObservations scratch;
-    PixelRows rows;
-    for (std::size_t i = begin; i < end; ++i) {
-      const std::size_t p = pixels[i];
-      pixel_rows(observations, p, normal_at(normals, observations.pixels[p]), options.order,
-                 options.shadow_threshold, scratch, rows);
-      if (!(rows.lambert > 0)) continue;
-      ++mine.pixels;
-      for (Eigen::Index r = 0; r < rows.design.rows(); ++r) {
-        const auto u = static_cast<std::size_t>(r);
-        if (!rows.lit[u]) continue;
-        const Eigen::VectorXd a = rows.design.row(r).transpose();
-        mine.weights += a.cwiseAbs2();
-        const Eigen::MatrixXd outer = a * a.transpose();
-        const Eigen::VectorXd target = a * (rows.values(r) / rows.lambert);
-        for (int f = 0; f <= folds; ++f) {
-          if (f < folds && rows.image[u] % folds == f) continue;
-          mine.gram[static_cast<std::size_t>(f)] += outer;
-          mine.rhs[static_cast<std::size_t>(f)] += target;
-        }
-      }
-    }
-  });
-  ObjectSystems out;
-  out.gram.assign(static_cast<std::size_t>(folds + 1), Eigen::MatrixXd::Zero(terms, terms));
-  out.rhs.assign(static_cast<std::size_t>(folds + 1), Eigen::VectorXd::Zero(terms));
+ObjectBrdf object_brdf(const std::vector<PixelRows>& sample, int terms, int folds) {
+  std::vector<Eigen::MatrixXd> gram(static_cast<std::size_t>(folds + 1), Eigen::MatrixXd::Zero(terms, terms));
+  std::vector<Eigen::VectorXd> rhs(static_cast<std::size_t>(folds + 1), Eigen::VectorXd::Zero(terms));
+  ObjectBrdf out;
   out.weights = Eigen::VectorXd::Zero(terms);
   std::size_t counted = 0;
-  for (const Partial& mine : partial) {
-    if (mine.gram.empty()) continue;
-    for (std::size_t f = 0; f < out.gram.size(); ++f) {
-      out.gram[f] += mine.gram[f];
-      out.rhs[f] += mine.rhs[f];
+  FoldEquations equations;
+  for (const PixelRows& rows : sample) {
+    if (!(rows.lambert > 0)) continue;
+    ++counted;
+    fold_equations(rows, folds, equations);
+    for (std::size_t slot = 0; slot < gram.size(); ++slot) {
+      gram[slot] += equations.gram[slot];
+      rhs[slot] += equations.rhs[slot] / rows.lambert;
     }
-    out.weights += mine.weights;
-    counted += mine.pixels;
+    out.weights += equations.gram.back().diagonal();
   }
   if (counted > 0) out.weights /= static_cast<double>(counted);
+  for (std::size_t f = 0; f < gram.size(); ++f) {
+    Eigen::MatrixXd system = gram[f];
+    system.diagonal().array() += kWhisperRidge * std::max(system.trace(), 1e-300);
+    Eigen::VectorXd solution = system.ldlt().solve(rhs[f]);
+    if (!solution.allFinite()) {
+      solution = Eigen::VectorXd::Zero(terms);
+      solution(0) = 1;  // Lambertian
+    }
+    out.per_fold.push_back(solution);
+  }
   return out;
 }
 
-Eigen::VectorXd solve_object_brdf(const Eigen::MatrixXd& gram, const Eigen::VectorXd& rhs) {
-  Eigen::MatrixXd system = gram;
-  system.diagonal().array() += kWhisperRidge * std::max(system.trace(), 1e-300);
-  const Eigen::VectorXd g = system.ldlt().solve(rhs);
-  if (g.allFinite()) return g;
-  Eigen::VectorXd lambertian = Eigen::VectorXd::Zero(rhs.size());
-  lambertian(0) = 1;
-  return lambertian;
+// Cross-validated squared error of the relit held-out rows for each penalty
+// vector, relative to the held-out energy (relative RMSE).
+std::vector<double> cross_validate(const std::vector<PixelRows>& sample, const ObjectBrdf& object,
+                                   const std::vector<Eigen::VectorXd>& penalties, int folds, int threads) {
+  const auto count = static_cast<Eigen::Index>(penalties.size());
+  Eigen::MatrixXd errors = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(sample.size()), count);
+  Eigen::VectorXd energy = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(sample.size()));
+  parallel_chunks(sample.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    FoldEquations equations;
+    for (std::size_t i = begin; i < end; ++i) {
+      const PixelRows& rows = sample[i];
+      const auto at = static_cast<Eigen::Index>(i);
+      fold_equations(rows, folds, equations);
+      for (int f = 0; f < folds; ++f) {
+        const auto slot = static_cast<std::size_t>(f);
+        for (Eigen::Index c = 0; c < count; ++c) {
+          const Eigen::VectorXd coefficients = regularised_coefficients(
+              equations.gram[slot], equations.rhs[slot], object.per_fold[static_cast<std::size_t>(f)],
+              penalties[static_cast<std::size_t>(c)], rows.lambert);
+          for (Eigen::Index r = 0; r < rows.design.rows(); ++r) {
+            if (!held(rows, r, folds, f)) continue;
+            const double e = std::max(rows.design.row(r).dot(coefficients), 0.0) - rows.values(r);
+            errors(at, c) += e * e;
+          }
+        }
+      }
+      for (Eigen::Index r = 0; r < rows.design.rows(); ++r) energy(at) += rows.values(r) * rows.values(r);
+    }
+  });
+  const double reference = std::max(energy.sum(), std::numeric_limits<double>::min());
+  std::vector<double> out;
+  for (Eigen::Index c = 0; c < count; ++c) out.push_back(std::sqrt(errors.col(c).sum() / reference));
+  return out;
 }
 
 }  // namespace
@@ -197,9 +245,15 @@ void RelightingFitOptions::check() const {
     fail("RelightingFitOptions.shadow_threshold: must be finite and >= 0, got {}", shadow_threshold);
   if (lambda && !(std::isfinite(*lambda) && *lambda >= 0))
     fail("RelightingFitOptions.lambda: must be finite and >= 0, got {}", *lambda);
-  for (const double l : lambdas)
-    if (!(std::isfinite(l) && l >= 0))
-      fail("RelightingFitOptions.lambdas: must be finite and >= 0, got {}", l);
+  for (const auto* list : {&lambdas, &lobe_lambdas})
+    for (const double l : *list)
+      if (!(std::isfinite(l) && l >= 0))
+        fail("RelightingFitOptions.lambdas: must be finite and >= 0, got {}", l);
+  for (const double m : lobe_widths)
+    if (!(std::isfinite(m) && m > 0 && m <= 1))
+      fail("RelightingFitOptions.lobe_widths: must be in (0, 1], got {}", m);
+  if (!(std::isfinite(min_lobe_gain) && min_lobe_gain >= 0))
+    fail("RelightingFitOptions.min_lobe_gain: must be finite and >= 0, got {}", min_lobe_gain);
   if (folds < 2) fail("RelightingFitOptions.folds: must be at least 2, got {}", folds);
   if (sample_pixels < 1)
     fail("RelightingFitOptions.sample_pixels: must be at least 1, got {}", sample_pixels);
@@ -209,6 +263,9 @@ void RelightingFitOptions::check() const {
 nlohmann::json RelightingFit::to_json() const {
   nlohmann::json cv = nlohmann::json::array();
   for (const auto& [l, e] : validation) cv.push_back({{"lambda", l}, {"relative_rmse", e}});
+  nlohmann::json lobes = nlohmann::json::array();
+  for (const auto& [m, l, e] : lobe_validation)
+    lobes.push_back({{"width", m}, {"lambda", l}, {"relative_rmse", e}});
   std::vector<double> g(object_brdf.data(), object_brdf.data() + object_brdf.size());
   return {{"observations", "every lit, unsaturated observation at the solved normal"},
           {"prior", "object BRDF times a per-pixel scale"},
@@ -216,6 +273,8 @@ nlohmann::json RelightingFit::to_json() const {
           {"lambda", lambda},
           {"lambda_chosen_by", validation.empty() ? "fixed" : "cross-validation over the lights"},
           {"validation", cv},
+          {"lobe_validation", lobes},
+          {"lobe_lambda", lobe_lambda},
           {"pixels", pixels}};
 }
 
@@ -229,8 +288,8 @@ RelightingFit fit_relighting_brdf(const Observations& observations, const cv::Ma
         "fit_relighting_brdf: needs CV_32FC3 normals and a CV_8UC1 solved map of the observations' size "
         "{}x{}",
         observations.size.width, observations.size.height);
-  const int terms = bipolynomial_term_count(options.order);
   const int folds = options.folds;
+  const int polynomial = bipolynomial_term_count(options.order);
 
   std::vector<std::size_t> solved_pixels;
   for (std::size_t p = 0; p < observations.pixel_count(); ++p) {
@@ -239,84 +298,79 @@ RelightingFit fit_relighting_brdf(const Observations& observations, const cv::Ma
     if (solved.at<std::uint8_t>(at) != 0 && std::isfinite(n[0] + n[1] + n[2]) && cv::norm(n) > 0.5)
       solved_pixels.push_back(p);
   }
+  const std::vector<std::size_t> sample =
+      spread_sample(solved_pixels, static_cast<std::size_t>(options.sample_pixels));
   RelightingFit fit;
-  fit.coefficients = cv::Mat(observations.size, CV_32FC(terms), cv::Scalar::all(0));
   fit.pixels = solved_pixels.size();
-  const ObjectSystems systems =
-      object_systems(observations, normals, sample_pixels(solved_pixels, kObjectBrdfPixels), options);
-  fit.object_brdf = solve_object_brdf(systems.gram[static_cast<std::size_t>(folds)],
-                                      systems.rhs[static_cast<std::size_t>(folds)]);
-  const Eigen::VectorXd& weights = systems.weights;
 
+  Model model{options.order, 0};
+  std::vector<PixelRows> rows = sample_rows(observations, normals, sample, model, options);
+  ObjectBrdf object = object_brdf(rows, model.terms(), folds);
   if (options.lambda) {
     fit.lambda = *options.lambda;
   } else {
-    // Cross-validation: per sampled pixel and candidate, the squared error of
-    // the relit held-out values; summed in pixel order (thread-independent).
     const std::vector<double>& candidates = options.lambdas.empty() ? kDefaultLambdas : options.lambdas;
-    const std::vector<std::size_t> sample =
-        sample_pixels(solved_pixels, static_cast<std::size_t>(options.sample_pixels));
-    std::vector<Eigen::VectorXd> object_brdf(static_cast<std::size_t>(folds));
-    for (int f = 0; f < folds; ++f)
-      object_brdf[static_cast<std::size_t>(f)] = solve_object_brdf(systems.gram[static_cast<std::size_t>(f)],
-                                                                   systems.rhs[static_cast<std::size_t>(f)]);
-    const auto count = static_cast<Eigen::Index>(candidates.size());
-    Eigen::MatrixXd errors = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(sample.size()), count);
-    Eigen::VectorXd energy = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(sample.size()));
-    parallel_chunks(sample.size(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-      PixelObservations scratch;
-      PixelRows rows;
-      Eigen::MatrixXd gram;
-      Eigen::VectorXd rhs;
-      for (std::size_t i = begin; i < end; ++i) {
-        const std::size_t p = sample[i];
-        pixel_rows(observations, p, normal_at(normals, observations.pixels[p]), options.order,
-                   options.shadow_threshold, scratch, rows);
-        const auto row = static_cast<Eigen::Index>(i);
-        for (int f = 0; f < folds; ++f) {
-          lit_normal_equations(rows, folds, f, gram, rhs);
-          const Eigen::VectorXd& g = object_brdf[static_cast<std::size_t>(f)];
-          for (Eigen::Index c = 0; c < count; ++c) {
-            const Eigen::VectorXd coefficients = regularised_coefficients(
-                gram, rhs, g, weights, candidates[static_cast<std::size_t>(c)], rows.lambert);
-            for (Eigen::Index r = 0; r < rows.design.rows(); ++r) {
-              if (rows.image[static_cast<std::size_t>(r)] % folds != f) continue;
-              const double relit = std::max(rows.design.row(r).dot(coefficients), 0.0);
-              const double e = relit - rows.values(r);
-              errors(row, c) += e * e;
-            }
+    std::vector<Eigen::VectorXd> penalties;
+    for (const double l : candidates) penalties.push_back(l * object.weights);
+    const std::vector<double> errors = cross_validate(rows, object, penalties, folds, options.threads);
+    std::size_t best = 0;
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+      fit.validation.emplace_back(candidates[c], errors[c]);
+      if (errors[c] < errors[best]) best = c;
+    }
+    fit.lambda = candidates[best];
+    // The lobe: every width with every λ of its weight, at the polynomial's λ.
+    double best_error = errors[best] * (1 - options.min_lobe_gain);
+    if (options.specular_lobe) {
+      for (const double m : options.lobe_widths) {
+        const Model lobed{options.order, m};
+        const std::vector<PixelRows> lobe_rows = sample_rows(observations, normals, sample, lobed, options);
+        const ObjectBrdf lobe_object = object_brdf(lobe_rows, lobed.terms(), folds);
+        std::vector<Eigen::VectorXd> lobe_penalties;
+        for (const double l : options.lobe_lambdas) {
+          Eigen::VectorXd p = fit.lambda * lobe_object.weights;
+          p(polynomial) = l * lobe_object.weights(polynomial);
+          lobe_penalties.push_back(p);
+        }
+        const std::vector<double> lobe_errors =
+            cross_validate(lobe_rows, lobe_object, lobe_penalties, folds, options.threads);
+        for (std::size_t c = 0; c < lobe_errors.size(); ++c) {
+          fit.lobe_validation.push_back({m, options.lobe_lambdas[c], lobe_errors[c]});
+          if (lobe_errors[c] < best_error) {
+            best_error = lobe_errors[c];
+            fit.lobe_width = m;
+            fit.lobe_lambda = options.lobe_lambdas[c];
           }
-          for (Eigen::Index r = 0; r < rows.design.rows(); ++r)
-            if (rows.image[static_cast<std::size_t>(r)] % folds == f)
-              energy(row) += rows.values(r) * rows.values(r);
         }
       }
-    });
-    const Eigen::RowVectorXd total = errors.colwise().sum();
-    const double reference = std::max(energy.sum(), std::numeric_limits<double>::min());
-    Eigen::Index best = 0;
-    for (Eigen::Index c = 0; c < count; ++c) {
-      fit.validation.emplace_back(candidates[static_cast<std::size_t>(c)], std::sqrt(total(c) / reference));
-      if (total(c) < total(best)) best = c;
     }
-    fit.lambda = candidates[static_cast<std::size_t>(best)];
+    if (fit.lobe_width > 0) {
+      model.lobe = fit.lobe_width;
+      rows = sample_rows(observations, normals, sample, model, options);
+      object = object_brdf(rows, model.terms(), folds);
+    }
   }
+  fit.object_brdf = object.per_fold[static_cast<std::size_t>(folds)];
+  Eigen::VectorXd weights = fit.lambda * object.weights;
+  if (model.lobe > 0) weights(polynomial) = fit.lobe_lambda * object.weights(polynomial);
 
+  const int terms = model.terms();
+  fit.coefficients = cv::Mat(observations.size, CV_32FC(terms), cv::Scalar::all(0));
   parallel_chunks(
       solved_pixels.size(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
         PixelObservations scratch;
-        PixelRows rows;
+        PixelRows pixel;
         Eigen::MatrixXd gram;
         Eigen::VectorXd rhs;
         for (std::size_t i = begin; i < end; ++i) {
           const std::size_t p = solved_pixels[i];
           const cv::Point& at = observations.pixels[p];
-          pixel_rows(observations, p, normal_at(normals, at), options.order, options.shadow_threshold,
-                     scratch, rows);
-          if (rows.lit_rows == 0) continue;
-          lit_normal_equations(rows, folds, -1, gram, rhs);
+          pixel_rows(observations, p, normal_at(normals, at), model, options.shadow_threshold, scratch,
+                     pixel);
+          if (pixel.lit_rows == 0) continue;
+          lit_normal_equations(pixel, folds, -1, gram, rhs);
           const Eigen::VectorXd c =
-              regularised_coefficients(gram, rhs, fit.object_brdf, weights, fit.lambda, rows.lambert);
+              regularised_coefficients(gram, rhs, fit.object_brdf, weights, pixel.lambert);
           auto* out = fit.coefficients.ptr<float>(at.y) + static_cast<std::ptrdiff_t>(at.x) * terms;
           for (int t = 0; t < terms; ++t) out[t] = static_cast<float>(c(t));
         }

@@ -50,6 +50,7 @@ SurfaceModel load_surface_model(const io::SolveFolder& folder, int max_pixels,
   if (relight_model.order > 0) {
     model.kind = ShadingKind::kBiPolynomial;
     model.order = relight_model.order;
+    model.lobe_width = relight_model.lobe_width;
   } else if (const auto it = summary.find("reflectance");
              it != summary.end() && it->is_object() && it->value("model", "") == "bipolynomial") {
     notes.push_back(
@@ -83,9 +84,8 @@ double shade(const SurfaceModel& model, int x, int y, const Vec3& light) {
   if (model.kind == ShadingKind::kBiPolynomial) {
     const int terms = model.coefficients.channels();
     const auto* c = model.coefficients.ptr<float>(y) + static_cast<std::ptrdiff_t>(x) * terms;
-    Eigen::VectorXd coefficients(terms);
-    for (int i = 0; i < terms; ++i) coefficients(i) = c[i];
-    return std::max(evaluate_bipolynomial(model.order, coefficients, n, l), 0.0) * nl;  // ρ clamped to ≥ 0
+    const Vec3 h = (l + Vec3::UnitZ()).normalized();
+    return evaluate_relighting_brdf(model.order, model.lobe_width, c, n.dot(h), l.dot(h)) * nl;
   }
   return model.albedo.at<float>(y, x) * nl;
 }
@@ -141,18 +141,20 @@ ViewerPayload encode_viewer_payload(const SurfaceModel& model, const std::vector
   }
   const Vec3 initial = initial_light.normalized();
   ViewerPayload payload;
-  payload.meta = {{"width", width},
-                  {"height", height},
-                  {"encoding", "deflate"},
-                  {"planes", planes},
-                  {"model", model.kind == ShadingKind::kBiPolynomial
-                                ? nlohmann::json{{"kind", "bipolynomial"}, {"order", model.order}}
-                                : nlohmann::json{{"kind", "lambertian"}}},
-                  {"display", {{"scale", model.display_scale}, {"gamma", "linear"}}},
-                  {"stride", model.stride},
-                  {"source_size", {model.source_size.width, model.source_size.height}},
-                  {"lights", lights},
-                  {"light", {initial.x(), initial.y(), initial.z()}}};
+  payload.meta = {
+      {"width", width},
+      {"height", height},
+      {"encoding", "deflate"},
+      {"planes", planes},
+      {"model", model.kind == ShadingKind::kBiPolynomial ? nlohmann::json{{"kind", "bipolynomial"},
+                                                                          {"order", model.order},
+                                                                          {"lobe_width", model.lobe_width}}
+                                                         : nlohmann::json{{"kind", "lambertian"}}},
+      {"display", {{"scale", model.display_scale}, {"gamma", "linear"}}},
+      {"stride", model.stride},
+      {"source_size", {model.source_size.width, model.source_size.height}},
+      {"lights", lights},
+      {"light", {initial.x(), initial.y(), initial.z()}}};
   payload.data_base64 = base64(zlib_compress(bytes));
   return payload;
 }

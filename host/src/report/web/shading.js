@@ -7,6 +7,8 @@
 //   lambertian:    value = albedo · max(0, n·l)
 //   bipolynomial:  value = max(0, ρ(n·h, l·h)) · max(0, n·l),  h = normalise(l + v),
 //                  ρ(x, y) = Σ_i Σ_j C_ij x^i y^j, C_ij at index i·(k+1) + j
+//                  (+ S · D(n·h) when model.lobe_width m > 0, S the pixel's last
+//                  coefficient, D = exp(−tan²θ_h / m²) / cos⁴θ_h: specularLobe)
 //
 // Display: byte = round(255 · clamp01((exposure · value / scale)^(1/γ))) with
 // γ = 1 (linear, the default, what `lightstage relight` writes) or the sRGB curve.
@@ -27,6 +29,13 @@ export function evaluateBiPolynomial(order, coefficients, offset, x, y) {
     result = result * x + row;
   }
   return result;
+}
+
+// The relighting model's specular lobe (bipolynomial_model.hpp specular_lobe).
+export function specularLobe(nh, width) {
+  if (!(nh > 0) || !(width > 0)) return 0;
+  const c = Math.min(nh, 1), c2 = c * c;
+  return Math.exp(-(1 - c2) / (c2 * width * width)) / (c2 * c2);
 }
 
 // Decodes the payload's normals (uint16, the normal.png encoding, 0 0 0 = none)
@@ -56,7 +65,9 @@ export function renderRadiance(surface, light, out) {
   const count = valid.length;
   const bipolynomial = model.kind === 'bipolynomial' && coefficients;
   const order = bipolynomial ? model.order : 0;
-  const terms = bipolynomial ? (order + 1) * (order + 1) : 0;
+  const lobe = bipolynomial && model.lobe_width > 0 ? model.lobe_width : 0;
+  const polynomialTerms = bipolynomial ? (order + 1) * (order + 1) : 0;
+  const terms = polynomialTerms + (lobe > 0 ? 1 : 0);
   const h = normalise([l[0], l[1], l[2] + 1]);
   const lh = l[0] * h[0] + l[1] * h[1] + l[2] * h[2];
   for (let p = 0; p < count; ++p) {
@@ -73,7 +84,9 @@ export function renderRadiance(surface, light, out) {
     let rho;
     if (bipolynomial) {
       const nh = nx * h[0] + ny * h[1] + nz * h[2];
-      rho = Math.max(0, evaluateBiPolynomial(order, coefficients, p * terms, nh, lh));  // ρ clamped to ≥ 0
+      rho = evaluateBiPolynomial(order, coefficients, p * terms, nh, lh);
+      if (lobe > 0) rho += coefficients[p * terms + polynomialTerms] * specularLobe(nh, lobe);
+      rho = Math.max(0, rho);  // ρ clamped to ≥ 0
     } else {
       rho = albedo[p];
     }

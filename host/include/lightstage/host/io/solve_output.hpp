@@ -54,9 +54,11 @@ struct SolveFolder {
   cv::Mat residual;              // CV_32FC1 or empty
   cv::Mat confidence;            // CV_32FC1 or empty
   // The per-pixel reflectance model: CV_32FC(k) from files.brdf, with order > 0 for a
-  // bi-polynomial; empty (order 0) when the method fitted none.
+  // bi-polynomial (k + 1 channels with reflectance.specular); empty (order 0)
+  // when the method fitted none.
   cv::Mat coefficients;
   int reflectance_order = 0;
+  double lobe_width = 0;  // > 0: the coefficients' last channel weighs a specular lobe of this width
   nlohmann::json reflectance = nullptr;  // summary.json "reflectance"
 
   // albedo / albedo_png_scale clipped to [0, 1]: what albedo.png shows (for

@@ -33,6 +33,17 @@ double evaluate_bipolynomial(int order, const Eigen::Ref<const Eigen::VectorXd>&
 double evaluate_bipolynomial(int order, const Eigen::Ref<const Eigen::VectorXd>& coefficients, const Vec3& n,
                              const Vec3& l, const Vec3& v = Vec3::UnitZ());
 
+// The relighting model's optional specular lobe (reflectance/relighting_fit.hpp):
+// Beckmann-shaped in θ_h, of width `roughness` (m), 1 at n·h = 1:
+//   D = exp(−tan²θ_h / m²) / cos⁴θ_h,   cos θ_h = n·h (0 where n·h ≤ 0).
+double specular_lobe(double n_dot_h, double roughness);
+
+// ρ of the relighting model: the bi-polynomial of `order` in the first (k+1)²
+// of `coefficients` plus, when lobe_roughness > 0, the next one times the
+// lobe; clamped to ≥ 0 (as relighting renders it).
+double evaluate_relighting_brdf(int order, double lobe_roughness, const float* coefficients, double n_dot_h,
+                                double l_dot_h);
+
 // "C00", "C01", ... in storage order.
 std::vector<std::string> bipolynomial_term_names(int order);
 

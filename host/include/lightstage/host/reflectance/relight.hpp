@@ -2,7 +2,8 @@
 // Relighting from a solver's output folder: normals plus a per-pixel BRDF
 // (the bi-polynomial coefficients a bi-polynomial or auto solve writes) or,
 // for methods without one, the Lambertian albedo. A rendered value is
-//   ρ(n·h, l·h) · max(n·l, 0)    (ρ clamped to ≥ 0)
+//   ρ(n·h, l·h) · max(n·l, 0)    (ρ clamped to ≥ 0; plus the specular lobe
+//                                 when the solve fitted one)
 // in the stack's units (linear, at unit light intensity).
 
 #include "lightstage/common/geometry.hpp"
@@ -16,11 +17,12 @@
 namespace lightstage {
 
 struct RelightModel {
-  cv::Mat normals;       // CV_32FC3
-  cv::Mat solved;        // CV_8UC1
-  cv::Mat albedo;        // CV_32FC1 (Lambertian fallback)
-  cv::Mat coefficients;  // CV_32FC(k) or empty
-  int order = 0;         // bi-polynomial order, 0 = Lambertian albedo
+  cv::Mat normals;        // CV_32FC3
+  cv::Mat solved;         // CV_8UC1
+  cv::Mat albedo;         // CV_32FC1 (Lambertian fallback)
+  cv::Mat coefficients;   // CV_32FC(k), CV_32FC(k + 1) with the lobe, or empty
+  int order = 0;          // bi-polynomial order, 0 = Lambertian albedo
+  double lobe_width = 0;  // > 0: the last coefficient weighs a specular lobe (bipolynomial_model.hpp)
 };
 
 // The model of a solve folder (io/solve_output.hpp): its normals, albedo (1

@@ -6,7 +6,7 @@
 // Here, at the solved normal, the coefficients are refitted to every lit,
 // unsaturated observation, held towards the object's own BRDF:
 //   ρ_p(x, y) = Σ c_p,t x^i y^j,    x = n·h, y = l·h   (bipolynomial_model.hpp)
-//   c_p = argmin Σ_j ((n·l_j) b(x_j, y_j)ᵀ c − v_j)² + λ Σ_t D_t (c_t − s_p g_t)²
+//   c_p = argmin Σ_j ((n·l_j) b(x_j, y_j)ᵀ c − v_j)² + Σ_t λ_t D_t (c_t − s_p g_t)²
 // g: the object BRDF, one least-squares fit over the pixels of their values
 // divided by each pixel's Lambertian albedo; s_p: the pixel's scale of it;
 // D_t: the mean over pixels of Σ_j ((n·l_j) b_t)², so that λ = 1 weighs the
@@ -15,6 +15,12 @@
 // them in, instead of the noise. λ is chosen by cross-validation over the
 // lights (every folds-th light held out in turn, on a sample of pixels),
 // scoring the relit value max(ρ, 0)·(n·l) as `relight` renders it.
+// A sharp highlight is beyond any polynomial of this order, so the model may
+// add one term: ρ += c_lobe · D(n·h), D a Beckmann-shaped lobe of one width m
+// for the whole object (bipolynomial_model.hpp specular_lobe), its weight
+// held to the object's with its own λ. The same cross-validation picks m and
+// that λ, and keeps the lobe only when it predicts the held-out lights better
+// than the polynomial alone by more than min_lobe_gain.
 
 #include "lightstage/host/radiometry.hpp"
 
@@ -22,6 +28,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
+#include <array>
 #include <optional>
 #include <vector>
 
@@ -30,30 +37,40 @@ namespace lightstage {
 struct RelightingFitOptions {
   int order = 2;                 // bi-polynomial order of the coefficients written
   double shadow_threshold = 0;   // values at or below it are not lit (the solve's threshold)
-  std::optional<double> lambda;  // fixed prior weight; empty = chosen by cross-validation
+  std::optional<double> lambda;  // fixed prior weight (and no lobe); empty = cross-validation
   std::vector<double> lambdas;   // the candidates (empty = a default grid from 0 to 1000)
   int folds = 8;                 // cross-validation folds over the lights
-  int sample_pixels = 4000;      // pixels the cross-validation uses (evenly spread)
-  int threads = 0;               // 0 = hardware concurrency
+  int sample_pixels = 4000;      // pixels the object BRDF and the cross-validation use (evenly spread)
+  bool specular_lobe = true;     // try the lobe
+  std::vector<double> lobe_widths = {0.03, 0.05, 0.08, 0.12, 0.2};  // candidates for m
+  std::vector<double> lobe_lambdas = {0.01, 1, 100, 1e4};              // candidates for the lobe's λ
+  double min_lobe_gain = 0.01;  // relative cross-validated error the lobe must save
+  int threads = 0;              // 0 = hardware concurrency
 
   void check() const;  // throws InputError naming the field and value
 };
 
 struct RelightingFit {
-  cv::Mat coefficients;         // CV_32FC(k): per-pixel coefficients where solved, else 0
-  Eigen::VectorXd object_brdf;  // g
+  // CV_32FC(k), or CV_32FC(k + 1) with the lobe's weight last: per-pixel
+  // coefficients where solved, else 0.
+  cv::Mat coefficients;
+  Eigen::VectorXd object_brdf;  // g (the lobe's weight last)
   double lambda = 0;            // the weight used
-  // Cross-validated relative RMSE of the relit held-out values per candidate λ
-  // (empty when λ was fixed).
+  double lobe_width = 0;        // m; 0 = no lobe
+  double lobe_lambda = 0;       // the lobe weight's λ
+  // Cross-validated relative RMSE of the relit held-out values per candidate
+  // λ, then per lobe candidate {m, its λ, error} (empty when λ was fixed).
   std::vector<std::pair<double, double>> validation;
+  std::vector<std::array<double, 3>> lobe_validation;
   std::size_t pixels = 0;  // pixels refitted
 
-  nlohmann::json to_json() const;  // for the solve's reflectance description
+  // For the solve's reflectance description ("fit").
+  nlohmann::json to_json() const;
 };
 
 // Refits the coefficients of every solved pixel of `normals` (CV_32FC3) /
-// `solved` (CV_8UC1) from `observations`. Pixels with no lit observation get
-// the prior alone scaled by their Lambertian value. Throws InputError when
+// `solved` (CV_8UC1) from `observations`. Pixels without a lit observation
+// in front of their normal keep zero coefficients. Throws InputError when
 // the maps do not match the observations.
 RelightingFit fit_relighting_brdf(const Observations& observations, const cv::Mat& normals,
                                   const cv::Mat& solved, const RelightingFitOptions& options);
