@@ -61,8 +61,18 @@ double held_out_error(const Observations& all, const std::vector<int>& held, con
 
 cv::Mat all_solved(cv::Size size) { return cv::Mat(size, CV_8UC1, cv::Scalar::all(255)); }
 
-void split_lights(int count, int every, std::vector<int>& fit, std::vector<int>& held) {
-  for (int j = 0; j < count; ++j) (j % every == 3 % every ? held : fit).push_back(j);
+// Every `every`-th light (from the 4th) held out; the observations of the rest.
+struct HeldOut {
+  Observations fit;
+  std::vector<int> held;
+};
+
+HeldOut hold_out(const Observations& all, int every) {
+  std::vector<int> fit;
+  HeldOut out;
+  for (int j = 0; j < all.lights.rows(); ++j) (j % every == 3 % every ? out.held : fit).push_back(j);
+  out.fit = with_lights(all, fit);
+  return out;
 }
 
 // Two materials with different biquadratic BRDFs (left and right halves), so
@@ -125,9 +135,7 @@ TEST(RelightingFit, PredictsUnseenLightsFarBetterThanTheSolversOwnCoefficients) 
   const Eigen::MatrixX3d lights = hemisphere_lights(96, 11, 0.15);
   const auto scene =
       testing::make_reflectance_scene("cook-torrance:roughness=0.3,ks=0.4", lights, 24, 16, 0.02, 5);
-  std::vector<int> fit_lights, held;
-  split_lights(96, 8, fit_lights, held);
-  const Observations fit_obs = with_lights(scene.observations, fit_lights);
+  const auto [fit_obs, held] = hold_out(scene.observations, 8);
   BiPolynomialOptions solver;
   solver.order = 2;
   solver.shadow_threshold = 1e-3;
@@ -152,9 +160,7 @@ TEST(RelightingFit, ASharpHighlightGetsTheSpecularLobe) {
   const Eigen::MatrixX3d lights = hemisphere_lights(120, 13, 0.15);
   const auto scene =
       testing::make_reflectance_scene("cook-torrance:roughness=0.1,ks=0.5", lights, 40, 24, 0.01, 5);
-  std::vector<int> fit_lights, held;
-  split_lights(120, 8, fit_lights, held);
-  const Observations fit_obs = with_lights(scene.observations, fit_lights);
+  const auto [fit_obs, held] = hold_out(scene.observations, 8);
   RelightingFitOptions options;
   options.order = 2;
   options.shadow_threshold = 1e-3;
@@ -188,9 +194,7 @@ TEST(RelightingFit, FewLightsLeanOnTheObjectBrdf) {
   for (Eigen::Index i = 0; i < scene.observations.intensities.size(); ++i)
     scene.observations.intensities.data()[i] =
         std::max(0.f, scene.observations.intensities.data()[i] + noise(rng));
-  std::vector<int> fit_lights, held;
-  split_lights(24, 2, fit_lights, held);
-  const Observations fit_obs = with_lights(scene.observations, fit_lights);
+  const auto [fit_obs, held] = hold_out(scene.observations, 2);
   RelightingFitOptions options;
   options.order = 2;
   options.shadow_threshold = 0.01;

@@ -78,24 +78,23 @@ void pixel_rows(const Observations& observations, std::size_t p, const Eigen::Ve
 }
 
 bool held(const PixelRows& rows, Eigen::Index r, int folds, int fold) {
-  return fold >= 0 && rows.image[static_cast<std::size_t>(r)] % folds == fold;
+  return rows.image[static_cast<std::size_t>(r)] % folds == fold;
 }
 
-// Normal equations of the lit rows outside `fold` (-1 = none held out): G = Σ a aᵀ, b = Σ a v.
-void lit_normal_equations(const PixelRows& rows, int folds, int fold, Eigen::MatrixXd& gram,
-                          Eigen::VectorXd& rhs) {
+// Normal equations of the lit rows: G = Σ a aᵀ, b = Σ a v.
+void lit_normal_equations(const PixelRows& rows, Eigen::MatrixXd& gram, Eigen::VectorXd& rhs) {
   const Eigen::Index terms = rows.design.cols();
   gram.setZero(terms, terms);
   rhs.setZero(terms);
   for (Eigen::Index r = 0; r < rows.design.rows(); ++r) {
-    if (!rows.lit[static_cast<std::size_t>(r)] || held(rows, r, folds, fold)) continue;
+    if (!rows.lit[static_cast<std::size_t>(r)]) continue;
     gram.noalias() += rows.design.row(r).transpose() * rows.design.row(r);
     rhs.noalias() += rows.design.row(r).transpose() * rows.values(r);
   }
 }
 
-// The same per fold in one pass: gram[f] / rhs[f] over every lit row but
-// fold f's, gram[folds] / rhs[folds] over all of them.
+// The same per cross-validation fold, in one pass: gram[f] / rhs[f] over
+// every lit row but fold f's, gram[folds] / rhs[folds] over all of them.
 struct FoldEquations {
   std::vector<Eigen::MatrixXd> gram;
   std::vector<Eigen::VectorXd> rhs;
@@ -368,7 +367,7 @@ RelightingFit fit_relighting_brdf(const Observations& observations, const cv::Ma
           pixel_rows(observations, p, normal_at(normals, at), model, options.shadow_threshold, scratch,
                      pixel);
           if (pixel.lit_rows == 0) continue;
-          lit_normal_equations(pixel, folds, -1, gram, rhs);
+          lit_normal_equations(pixel, gram, rhs);
           const Eigen::VectorXd c =
               regularised_coefficients(gram, rhs, fit.object_brdf, weights, pixel.lambert);
           auto* out = fit.coefficients.ptr<float>(at.y) + static_cast<std::ptrdiff_t>(at.x) * terms;
