@@ -210,6 +210,50 @@ TEST(RelightingFit, FewLightsLeanOnTheObjectBrdf) {
   EXPECT_LT(e_chosen, 0.9 * e_none) << "λ " << chosen.lambda;
 }
 
+TEST(RelightingFit, PixelsWithNothingLitKeepTheFallback) {
+  Eigen::VectorXd c(9);
+  c << 0.9, 0.0, 0.1, 0.2, 0.0, 0.0, 0.3, 0.0, 0.0;
+  auto scene = biquadratic_scene(hemisphere_lights(40, 3, 0.2), cv::Size(8, 6), c, c);
+  scene.observations.intensities.row(5).setZero();  // pixel (5, 0): every light a shadow
+  const cv::Mat fallback =
+      cv::Mat(6, 8 * 9, CV_32FC1, cv::Scalar::all(0.25)).reshape(9);  // OpenCV fills at most 4 channels
+  RelightingFitOptions options;
+  options.shadow_threshold = 1e-3;
+  const RelightingFit fit = fit_relighting_brdf(scene.observations, scene.truth,
+                                                all_solved(scene.observations.size), options, fallback);
+  EXPECT_EQ(fit.pixels, 47u);
+  const int terms = fit.coefficients.channels();
+  const float* kept = fit.coefficients.ptr<float>(0) + 5 * terms;
+  for (int t = 0; t < 9; ++t) EXPECT_EQ(kept[t], 0.25f) << t;
+  if (terms == 10) {
+    EXPECT_EQ(kept[9], 0.f);
+  }
+  // Its neighbour is refitted: it relights its own lights (exact data).
+  const Vec3 n = grid_normal(4, 0, 8, 6);
+  const float* refitted = fit.coefficients.ptr<float>(0) + 4 * terms;
+  for (Eigen::Index j = 0; j < scene.observations.lights.rows(); ++j) {
+    const Vec3 l = scene.observations.lights.row(j).transpose();
+    const Vec3 h = (l + Vec3::UnitZ()).normalized();
+    const double relit =
+        evaluate_relighting_brdf(2, fit.lobe_width, refitted, n.dot(h), l.dot(h)) * std::max(n.dot(l), 0.0);
+    EXPECT_NEAR(relit, scene.observations.intensities(4, j), 1e-3) << j;
+  }
+  EXPECT_THROW(fit_relighting_brdf(scene.observations, scene.truth, all_solved(scene.observations.size),
+                                   options, cv::Mat(2, 2, CV_32FC(9))),
+               InputError);
+}
+
+TEST(RelightingFit, TheLobeIsOneAtItsPeakAndZeroFarDownItsTail) {
+  EXPECT_DOUBLE_EQ(specular_lobe(1.0, 0.05), 1.0);
+  EXPECT_EQ(specular_lobe(0.0, 0.05), 0.0);
+  EXPECT_EQ(specular_lobe(1e-200, 0.05), 0.0);  // no 0/0
+  EXPECT_EQ(specular_lobe(-0.5, 0.05), 0.0);
+  EXPECT_NEAR(specular_lobe(std::cos(0.05), 0.05),
+              std::exp(-std::pow(std::tan(0.05) / 0.05, 2)) / std::pow(std::cos(0.05), 4), 1e-12);
+  // The peak stays at n·h = 1 up to the widest width allowed.
+  EXPECT_LE(specular_lobe(0.95, kMaxLobeWidth), 1.0);
+}
+
 TEST(RelightingFit, BadOptionsAndMapsAreNamed) {
   const Eigen::MatrixX3d lights = hemisphere_lights(20, 3, 0.2);
   const auto scene = testing::make_reflectance_scene("lambert", lights, 6, 4);

@@ -138,7 +138,8 @@ SolveResult solve_with(const Observations& observations, const SolveSettings& se
     refit.order = result.reflectance.at("order").get<int>();
     refit.shadow_threshold = std::max(0.0, used.value);
     refit.threads = settings.threads.value_or(0);
-    const RelightingFit fitted = fit_relighting_brdf(observations, result.normals, result.solved, refit);
+    const RelightingFit fitted =
+        fit_relighting_brdf(observations, result.normals, result.solved, refit, result.coefficients);
     result.coefficients = fitted.coefficients;
     result.reflectance["fit"] = fitted.to_json();
     if (fitted.lobe_width > 0) {

@@ -191,8 +191,9 @@ void read_reflectance(SolveFolder& folder) {
       specular != reflectance->end() && !specular->is_null()) {
     const auto width = specular->is_object() ? specular->find("width") : specular->end();
     if (width == specular->end() || !width->is_number() ||
-        !(width->get<double>() > 0 && width->get<double>() <= 1))
-      fail("{}: reflectance.specular.width must be a number in (0, 1]", summary_path.string());
+        !(width->get<double>() > 0 && width->get<double>() <= kMaxLobeWidth))
+      fail("{}: reflectance.specular.width must be a number in (0, {}]", summary_path.string(),
+           kMaxLobeWidth);
     lobe_width = width->get<double>();
   }
   const auto& names = (*files)["brdf"];

@@ -49,10 +49,20 @@ double evaluate_bipolynomial(int order, const Eigen::Ref<const Eigen::VectorXd>&
   return evaluate_bipolynomial(order, coefficients, n.dot(h), l.dot(h));
 }
 
+namespace {
+constexpr double kLobeCutoff = 700;  // exp(−700) ≈ 1e-304
+}  // namespace
+
 double specular_lobe(double n_dot_h, double roughness) {
   if (!(n_dot_h > 0) || !(roughness > 0)) return 0;
   const double c = std::min(n_dot_h, 1.0), c2 = c * c;
-  return std::exp(-(1 - c2) / (c2 * roughness * roughness)) / (c2 * c2);
+  const double exponent = (1 - c2) / (c2 * roughness * roughness);
+  // Far down the tail exp(−t) is 0 long before 1/cos⁴ overflows (or makes 0/0).
+  return exponent > kLobeCutoff ? 0.0 : std::exp(-exponent) / (c2 * c2);
+}
+
+int relighting_term_count(int order, double lobe_width) {
+  return bipolynomial_term_count(order) + (lobe_width > 0 ? 1 : 0);
 }
 
 double evaluate_relighting_brdf(int order, double lobe_roughness, const float* coefficients, double n_dot_h,

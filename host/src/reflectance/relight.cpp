@@ -30,7 +30,9 @@ cv::Mat relight(const RelightModel& model, const Vec3& light_in, const Vec3& vie
   const Vec3 l = light_in.normalized();
   const Vec3 h = (l + view).normalized();
   cv::Mat out(model.normals.size(), CV_32FC1, cv::Scalar::all(0));
-  const int k = model.order > 0 ? model.coefficients.channels() : 0;
+  const int k = model.order > 0 ? relighting_term_count(model.order, model.lobe_width) : 0;
+  if (k > 0 && (model.coefficients.type() != CV_32FC(k) || model.coefficients.size() != model.normals.size()))
+    fail("relight: the bi-polynomial model needs {} coefficient maps of the normals' size", k);
   for (int y = 0; y < out.rows; ++y) {
     for (int x = 0; x < out.cols; ++x) {
       if (model.solved.at<std::uint8_t>(y, x) == 0) continue;

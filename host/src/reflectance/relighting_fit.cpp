@@ -15,7 +15,7 @@
 namespace lightstage {
 namespace {
 
-// The default candidates for λ: none, then half-decades up to the prior alone.
+// The default candidates for λ: none, then roughly half-decades up to the prior alone.
 const std::vector<double> kDefaultLambdas = {0, 1e-3, 3e-3, 0.01, 0.03, 0.1, 0.3, 1, 3, 10, 100, 1000};
 // Keeps a system with undetermined terms solvable (λ = 0) without biasing it.
 constexpr double kWhisperRidge = 1e-10;
@@ -244,13 +244,15 @@ void RelightingFitOptions::check() const {
     fail("RelightingFitOptions.shadow_threshold: must be finite and >= 0, got {}", shadow_threshold);
   if (lambda && !(std::isfinite(*lambda) && *lambda >= 0))
     fail("RelightingFitOptions.lambda: must be finite and >= 0, got {}", *lambda);
-  for (const auto* list : {&lambdas, &lobe_lambdas})
-    for (const double l : *list)
-      if (!(std::isfinite(l) && l >= 0))
-        fail("RelightingFitOptions.lambdas: must be finite and >= 0, got {}", l);
+  for (const double l : lambdas)
+    if (!(std::isfinite(l) && l >= 0))
+      fail("RelightingFitOptions.lambdas: must be finite and >= 0, got {}", l);
+  for (const double l : lobe_lambdas)
+    if (!(std::isfinite(l) && l >= 0))
+      fail("RelightingFitOptions.lobe_lambdas: must be finite and >= 0, got {}", l);
   for (const double m : lobe_widths)
-    if (!(std::isfinite(m) && m > 0 && m <= 1))
-      fail("RelightingFitOptions.lobe_widths: must be in (0, 1], got {}", m);
+    if (!(std::isfinite(m) && m > 0 && m <= kMaxLobeWidth))
+      fail("RelightingFitOptions.lobe_widths: must be in (0, {}], got {}", kMaxLobeWidth, m);
   if (!(std::isfinite(min_lobe_gain) && min_lobe_gain >= 0))
     fail("RelightingFitOptions.min_lobe_gain: must be finite and >= 0, got {}", min_lobe_gain);
   if (folds < 2) fail("RelightingFitOptions.folds: must be at least 2, got {}", folds);
@@ -278,7 +280,8 @@ nlohmann::json RelightingFit::to_json() const {
 }
 
 RelightingFit fit_relighting_brdf(const Observations& observations, const cv::Mat& normals,
-                                  const cv::Mat& solved, const RelightingFitOptions& options) {
+                                  const cv::Mat& solved, const RelightingFitOptions& options,
+                                  const cv::Mat& fallback) {
   options.check();
   check_observations(observations, "fit_relighting_brdf");
   if (normals.type() != CV_32FC3 || solved.type() != CV_8UC1 || normals.size() != observations.size ||
@@ -289,6 +292,9 @@ RelightingFit fit_relighting_brdf(const Observations& observations, const cv::Ma
         observations.size.width, observations.size.height);
   const int folds = options.folds;
   const int polynomial = bipolynomial_term_count(options.order);
+  if (!fallback.empty() && (fallback.size() != observations.size || fallback.type() != CV_32FC(polynomial)))
+    fail("fit_relighting_brdf: the fallback coefficients must be CV_32FC({}) of the observations' size",
+         polynomial);
 
   std::vector<std::size_t> solved_pixels;
   for (std::size_t p = 0; p < observations.pixel_count(); ++p) {
@@ -300,7 +306,6 @@ RelightingFit fit_relighting_brdf(const Observations& observations, const cv::Ma
   const std::vector<std::size_t> sample =
       spread_sample(solved_pixels, static_cast<std::size_t>(options.sample_pixels));
   RelightingFit fit;
-  fit.pixels = solved_pixels.size();
 
   Model model{options.order, 0};
   std::vector<PixelRows> rows = sample_rows(observations, normals, sample, model, options);
@@ -355,6 +360,7 @@ RelightingFit fit_relighting_brdf(const Observations& observations, const cv::Ma
 
   const int terms = model.terms();
   fit.coefficients = cv::Mat(observations.size, CV_32FC(terms), cv::Scalar::all(0));
+  std::vector<std::uint8_t> refitted(solved_pixels.size(), 0);
   parallel_chunks(
       solved_pixels.size(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
         PixelObservations scratch;
@@ -366,14 +372,23 @@ RelightingFit fit_relighting_brdf(const Observations& observations, const cv::Ma
           const cv::Point& at = observations.pixels[p];
           pixel_rows(observations, p, normal_at(normals, at), model, options.shadow_threshold, scratch,
                      pixel);
-          if (pixel.lit_rows == 0) continue;
+          auto* out = fit.coefficients.ptr<float>(at.y) + static_cast<std::ptrdiff_t>(at.x) * terms;
+          if (pixel.lit_rows == 0) {
+            // Nothing lit in front of the normal: the fallback's polynomial, no lobe.
+            if (!fallback.empty()) {
+              const auto* given = fallback.ptr<float>(at.y) + static_cast<std::ptrdiff_t>(at.x) * polynomial;
+              std::copy(given, given + polynomial, out);
+            }
+            continue;
+          }
+          refitted[i] = 1;
           lit_normal_equations(pixel, gram, rhs);
           const Eigen::VectorXd c =
               regularised_coefficients(gram, rhs, fit.object_brdf, weights, pixel.lambert);
-          auto* out = fit.coefficients.ptr<float>(at.y) + static_cast<std::ptrdiff_t>(at.x) * terms;
           for (int t = 0; t < terms; ++t) out[t] = static_cast<float>(c(t));
         }
       });
+  fit.pixels = static_cast<std::size_t>(std::count(refitted.begin(), refitted.end(), 1));
   return fit;
 }
 

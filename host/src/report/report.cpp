@@ -200,7 +200,10 @@ std::string viewer_section(const SurfaceModel& model, const Inputs& in) {
   const ViewerPayload payload = encode_viewer_payload(model, lights, Vec3(-0.4, 0.4, 0.82));
   std::string model_text =
       model.kind == ShadingKind::kBiPolynomial
-          ? fmt::format("the fitted {} model: ρ(n·h, l·h) · max(0, n·l)", bipolynomial_name(model.order))
+          ? fmt::format("the fitted {} model: ρ(n·h, l·h) · max(0, n·l){}", bipolynomial_name(model.order),
+                        model.lobe_width > 0
+                            ? fmt::format(", ρ with a specular lobe of width {:.2f}", model.lobe_width)
+                            : std::string())
           : std::string("Lambertian: albedo · max(0, n·l)");
   std::string html = fmt::format(
       "<p>Drag on the hemisphere (mouse, pen or finger) to move a distant light; or focus it and use the "

@@ -82,7 +82,7 @@ double shade(const SurfaceModel& model, int x, int y, const Vec3& light) {
   const double nl = n.dot(l);
   if (!(nl > 0)) return 0;
   if (model.kind == ShadingKind::kBiPolynomial) {
-    const int terms = model.coefficients.channels();
+    const int terms = relighting_term_count(model.order, model.lobe_width);
     const auto* c = model.coefficients.ptr<float>(y) + static_cast<std::ptrdiff_t>(x) * terms;
     const Vec3 h = (l + Vec3::UnitZ()).normalized();
     return evaluate_relighting_brdf(model.order, model.lobe_width, c, n.dot(h), l.dot(h)) * nl;
@@ -90,7 +90,20 @@ double shade(const SurfaceModel& model, int x, int y, const Vec3& light) {
   return model.albedo.at<float>(y, x) * nl;
 }
 
+namespace {
+
+// The coefficient maps must hold what the model reads for every pixel.
+void check_coefficients(const SurfaceModel& model) {
+  if (model.kind != ShadingKind::kBiPolynomial) return;
+  const int terms = relighting_term_count(model.order, model.lobe_width);
+  if (model.coefficients.type() != CV_32FC(terms) || model.coefficients.size() != model.normals.size())
+    fail("report: the bi-polynomial viewer model needs {} coefficient maps of the normals' size", terms);
+}
+
+}  // namespace
+
 cv::Mat relight(const SurfaceModel& model, const Vec3& light) {
+  check_coefficients(model);
   cv::Mat out(model.normals.size(), CV_32FC1, cv::Scalar(0));
   for (int y = 0; y < out.rows; ++y)
     for (int x = 0; x < out.cols; ++x) out.at<float>(y, x) = static_cast<float>(shade(model, x, y, light));
@@ -99,6 +112,7 @@ cv::Mat relight(const SurfaceModel& model, const Vec3& light) {
 
 ViewerPayload encode_viewer_payload(const SurfaceModel& model, const std::vector<Vec3>& capture_lights,
                                     const Vec3& initial_light) {
+  check_coefficients(model);
   const int width = model.normals.cols, height = model.normals.rows;
   const auto count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   std::vector<std::uint8_t> bytes;

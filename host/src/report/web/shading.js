@@ -35,7 +35,8 @@ export function evaluateBiPolynomial(order, coefficients, offset, x, y) {
 export function specularLobe(nh, width) {
   if (!(nh > 0) || !(width > 0)) return 0;
   const c = Math.min(nh, 1), c2 = c * c;
-  return Math.exp(-(1 - c2) / (c2 * width * width)) / (c2 * c2);
+  const exponent = (1 - c2) / (c2 * width * width);
+  return exponent > 700 ? 0 : Math.exp(-exponent) / (c2 * c2);  // as the C++: no 0/0 far down the tail
 }
 
 // Decodes the payload's normals (uint16, the normal.png encoding, 0 0 0 = none)

@@ -50,6 +50,11 @@ async function loadSurface(meta, dataText) {
   if (meta.model.kind === 'bipolynomial' && !coefficients) {
     throw new Error('viewer data: a bi-polynomial model without its coefficients plane');
   }
+  if (coefficients) {
+    const terms = (meta.model.order + 1) ** 2 + (meta.model.lobe_width > 0 ? 1 : 0);
+    const given = meta.planes.find((p) => p.name === 'coefficients').components;
+    if (given !== terms) throw new Error(`viewer data: ${given} coefficients per pixel, the model has ${terms}`);
+  }
   return { normals, valid, albedo, coefficients, model: meta.model };
 }
 

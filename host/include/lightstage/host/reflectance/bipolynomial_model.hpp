@@ -36,7 +36,12 @@ double evaluate_bipolynomial(int order, const Eigen::Ref<const Eigen::VectorXd>&
 // The relighting model's optional specular lobe (reflectance/relighting_fit.hpp):
 // Beckmann-shaped in θ_h, of width `roughness` (m), 1 at n·h = 1:
 //   D = exp(−tan²θ_h / m²) / cos⁴θ_h,   cos θ_h = n·h (0 where n·h ≤ 0).
+// Widths above kMaxLobeWidth (1/√2) would move its peak off n·h = 1.
+inline constexpr double kMaxLobeWidth = 0.7;
 double specular_lobe(double n_dot_h, double roughness);
+
+// Coefficients per pixel of the relighting model: (k+1)², plus 1 with a lobe.
+int relighting_term_count(int order, double lobe_width);
 
 // ρ of the relighting model: the bi-polynomial of `order` in the first (k+1)²
 // of `coefficients` plus, when lobe_roughness > 0, the next one times the

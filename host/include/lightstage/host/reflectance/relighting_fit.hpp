@@ -43,7 +43,7 @@ struct RelightingFitOptions {
   int sample_pixels = 4000;      // pixels the object BRDF and the cross-validation use (evenly spread)
   bool specular_lobe = true;     // try the lobe
   std::vector<double> lobe_widths = {0.03, 0.05, 0.08, 0.12, 0.2};  // candidates for m
-  std::vector<double> lobe_lambdas = {0.01, 1, 100, 1e4};              // candidates for the lobe's λ
+  std::vector<double> lobe_lambdas = {0.01, 1, 100, 1e4};           // candidates for the lobe's λ
   double min_lobe_gain = 0.01;  // relative cross-validated error the lobe must save
   int threads = 0;              // 0 = hardware concurrency
 
@@ -62,7 +62,7 @@ struct RelightingFit {
   // λ, then per lobe candidate {m, its λ, error} (empty when λ was fixed).
   std::vector<std::pair<double, double>> validation;
   std::vector<std::array<double, 3>> lobe_validation;
-  std::size_t pixels = 0;  // pixels refitted
+  std::size_t pixels = 0;  // pixels refitted (the others kept the fallback)
 
   // For the solve's reflectance description ("fit").
   nlohmann::json to_json() const;
@@ -70,9 +70,11 @@ struct RelightingFit {
 
 // Refits the coefficients of every solved pixel of `normals` (CV_32FC3) /
 // `solved` (CV_8UC1) from `observations`. Pixels without a lit observation
-// in front of their normal keep zero coefficients. Throws InputError when
-// the maps do not match the observations.
+// in front of their normal keep `fallback`'s polynomial (the solver's
+// coefficients, CV_32FC((order+1)²); empty = zeros) and no lobe. Throws
+// InputError when the maps do not match the observations.
 RelightingFit fit_relighting_brdf(const Observations& observations, const cv::Mat& normals,
-                                  const cv::Mat& solved, const RelightingFitOptions& options);
+                                  const cv::Mat& solved, const RelightingFitOptions& options,
+                                  const cv::Mat& fallback = {});
 
 }  // namespace lightstage
