@@ -308,7 +308,7 @@ RelightingFit fit_relighting_brdf(const Observations& observations, const cv::Ma
   RelightingFit fit;
 
   Model model{options.order, 0};
-  std::vector<PixelRows> rows = sample_rows(observations, normals, sample, model, options);
+  const std::vector<PixelRows> rows = sample_rows(observations, normals, sample, model, options);
   ObjectBrdf object = object_brdf(rows, model.terms(), folds);
   if (options.lambda) {
     fit.lambda = *options.lambda;
@@ -342,17 +342,14 @@ RelightingFit fit_relighting_brdf(const Observations& observations, const cv::Ma
           fit.lobe_validation.push_back({m, options.lobe_lambdas[c], lobe_errors[c]});
           if (lobe_errors[c] < best_error) {
             best_error = lobe_errors[c];
+            object = lobe_object;  // the chosen width's object BRDF, kept rather than refitted
             fit.lobe_width = m;
             fit.lobe_lambda = options.lobe_lambdas[c];
           }
         }
       }
     }
-    if (fit.lobe_width > 0) {
-      model.lobe = fit.lobe_width;
-      rows = sample_rows(observations, normals, sample, model, options);
-      object = object_brdf(rows, model.terms(), folds);
-    }
+    model.lobe = fit.lobe_width;
   }
   fit.object_brdf = object.per_fold[static_cast<std::size_t>(folds)];
   Eigen::VectorXd weights = fit.lambda * object.weights;
