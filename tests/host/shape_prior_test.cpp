@@ -12,6 +12,7 @@
 #include "lightstage/sim/natural_capture.hpp"
 #include "lightstage/testing/errors.hpp"
 #include "lightstage/testing/paths.hpp"
+#include "lightstage/testing/sanitizers.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -126,6 +127,7 @@ void expect_clean_uniform_under_three_degrees(const std::string& scene) {
 }
 
 TEST(ShapePrior, CleanPriorUniformAlbedoNonlinearResponsesUnderThreeDegreesSphere) {
+  LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("CleanPriorUniformAlbedoNonlinearResponsesUnderThreeDegreesBunny");
   expect_clean_uniform_under_three_degrees("sphere");
 }
 
@@ -134,6 +136,7 @@ TEST(ShapePrior, CleanPriorUniformAlbedoNonlinearResponsesUnderThreeDegreesBunny
 }
 
 TEST(ShapePrior, CleanPriorStrongAlbedoContrastUnderFiveDegrees) {
+  LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("CleanPriorUniformAlbedoNonlinearResponsesUnderThreeDegreesBunny");
   for (const std::string scene : {"bumps", "bunny"}) {
     Scenario s;
     s.scene = scene;
@@ -147,6 +150,7 @@ TEST(ShapePrior, CleanPriorStrongAlbedoContrastUnderFiveDegrees) {
 }
 
 TEST(ShapePrior, FourBitNoisyPriorUnderTwelveDegrees) {
+  LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("CleanPriorUniformAlbedoNonlinearResponsesUnderThreeDegreesBunny");
   for (const std::string scene : {"bumps", "bunny"}) {
     Scenario s;
     s.scene = scene;
@@ -159,6 +163,7 @@ TEST(ShapePrior, FourBitNoisyPriorUnderTwelveDegrees) {
 }
 
 TEST(ShapePrior, RefinementHelpsWithAlbedoContrast) {
+  LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("KeepsTheCleanPriorWhereTheFitDoesNotExplainTheImagesBetter");
   // Eq. 4.6 alone cannot separate albedo from shape; Eq. 4.7 can.
   Scenario s;
   s.scene = "bumps";
@@ -191,11 +196,17 @@ void expect_never_worse_than_the_prior(const std::string& scene) {
   }
 }
 
-TEST(ShapePrior, NeverEndsWorseThanItsPriorBumps) { expect_never_worse_than_the_prior("bumps"); }
+TEST(ShapePrior, NeverEndsWorseThanItsPriorBumps) {
+  LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("NeverEndsWorseThanItsPriorBunny");
+  expect_never_worse_than_the_prior("bumps");
+}
 
 TEST(ShapePrior, NeverEndsWorseThanItsPriorBunny) { expect_never_worse_than_the_prior("bunny"); }
 
-TEST(ShapePrior, NeverEndsWorseThanItsPriorSphere) { expect_never_worse_than_the_prior("sphere"); }
+TEST(ShapePrior, NeverEndsWorseThanItsPriorSphere) {
+  LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("NeverEndsWorseThanItsPriorBunny");
+  expect_never_worse_than_the_prior("sphere");
+}
 
 TEST(ShapePrior, KeepsTheCleanPriorWhereTheFitDoesNotExplainTheImagesBetter) {
   // A clean sphere prior (under half a degree) is better than the SH fit,

@@ -14,6 +14,7 @@
 #include "lightstage/pipeline/synthetic_observations.hpp"
 #include "lightstage/sim/material.hpp"
 #include "lightstage/testing/paths.hpp"
+#include "lightstage/testing/sanitizers.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -129,6 +130,7 @@ TEST(Confidence, OrdersTheErrorOfEveryMethodOnSeveralNoisyMaterials) {
 }
 
 TEST(Confidence, OrdersTheLeastSquaresErrorOnTheDiligentBall) {
+  LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("Confidence.OrdersTheErrorOfEveryMethodOnSeveralNoisyMaterials");
   const auto shared = testing::shared_data_dir();
   if (shared.empty() || !fs::exists(shared / "diligent/ballPNG")) GTEST_SKIP() << "shared data not found";
   const SolveInput input = load_solve_input(shared / "diligent/ballPNG", RadiometryOptions{});

@@ -7,6 +7,7 @@
 #include "lightstage/pipeline/solve_folder.hpp"
 #include "lightstage/pipeline/solve_methods.hpp"
 #include "lightstage/testing/paths.hpp"
+#include "lightstage/testing/sanitizers.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -33,6 +34,7 @@ SolveReport solve_ball(const std::string& method, const fs::path& out) {
 }
 
 TEST(RealDataDefaults, DiligentBallWithNoFlagButTheMethod) {
+  LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("HostRealData.DiligentBallGeneralReflectanceMethods");
   if (ball_dir().empty()) GTEST_SKIP() << "shared data not found";
   // The targets (mean degrees over the 15,791 mask pixels).
   const std::map<std::string, double> targets = {

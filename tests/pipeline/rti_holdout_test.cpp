@@ -3,6 +3,7 @@
 // reports, pinned loosely so a broken fit or evaluation shows.
 #include "lightstage/pipeline/rti_exchange.hpp"
 #include "lightstage/testing/paths.hpp"
+#include "lightstage/testing/sanitizers.hpp"
 
 #include <gtest/gtest.h>
 
@@ -31,17 +32,11 @@ TEST(RtiHoldout, BallMatchesThePublishedRtiFigures) {
 // runs under the sanitizers in test_host_relighting_fit.
 class RtiHoldoutMethod : public ::testing::TestWithParam<const char*> {};
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-
 TEST_P(RtiHoldoutMethod, BallRelightsBetterThanPtmAndHsh) {
   const auto ball = testing::shared_data_dir() / "diligent/ballPNG";
   if (testing::shared_data_dir().empty() || !std::filesystem::exists(ball))
     GTEST_SKIP() << "no DiLiGenT ball";
-  if (kSanitized) GTEST_SKIP() << "twelve solves of the ball: the release flavour measures them";
+  LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("test_host_relighting_fit");
   const std::string method = GetParam();
   const auto r = pipeline::rti_holdout({.input = ball, .held_out = 12, .methods = {method}});
   const double e = r["models"][method]["relative_rmse"].get<double>();
