@@ -62,7 +62,7 @@ void add_integrate(CLI::App& app) {
   sub->add_option("--input", args->input, "a solve result folder (normal.png, albedo.png)");
   sub->add_option("--normals", args->normals, "normal map (16-bit PNG, project encoding)");
   sub->add_option("--mask", args->mask, "object mask (default: where the normal map has normals)");
-  sub->add_option("--albedo", args->albedo, "albedo image for the mesh colours (PNG or PFM)");
+  sub->add_option("--albedo", args->albedo, "albedo image for the mesh colours (grey or colour PNG or PFM)");
   sub->add_option("--out", args->out, "output folder")->required();
   sub->add_option("--method", args->method, "poisson or frankot-chellappa")
       ->check(CLI::IsMember({"poisson", "frankot-chellappa", "fc"}))

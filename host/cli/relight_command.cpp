@@ -32,7 +32,7 @@ void add_relight(CLI::App& app) {
     int turntable = 0;
     double elevation = 45;
     double scale = 0;
-    bool holdout = false, json = false;
+    bool holdout = false, json = false, grey = false;
     pipeline::HoldoutSettings holdout_settings;
   };
   auto args = std::make_shared<Args>();
@@ -41,7 +41,8 @@ void add_relight(CLI::App& app) {
       "Render a solved object under new distant lights from its normals and per-pixel BRDFs.\n"
       "Reads a `solve` output folder (a bi-polynomial or auto solve carries per-pixel BRDF coefficients; "
       "other methods relight with their Lambertian albedo) and writes one 16-bit PNG per light "
-      "(relit_000.png, ...; value = min(v / scale, 1) * 65535) plus relight.json.\n"
+      "(relit_000.png, ...; value = min(v / scale, 1) * 65535) plus relight.json. A solve of a colour stack "
+      "relights in colour (the albedo's colour; a fitted specular lobe stays white); --grey for grey.\n"
       "With --holdout, --input is a stack folder instead and nothing is written: N lights evenly spaced in "
       "the stack's order are held out one at a time, every model is fitted on the other lights and relit at "
       "the held-out one, and the table gives relative RMSE = |relit - photo| / |photo| over the mask (grey "
@@ -60,6 +61,7 @@ void add_relight(CLI::App& app) {
   sub->add_option("--elevation", args->elevation, "turntable light elevation, degrees")
       ->capture_default_str();
   sub->add_option("--scale", args->scale, "value mapped to white (0 = the 99.5th percentile of all frames)");
+  sub->add_flag("--grey", args->grey, "grey images even when the solve is of a colour stack");
   sub->add_flag("--holdout", args->holdout, "leave-one-light-out relighting error of every model on a stack");
   sub->add_option("--held-out", args->holdout_settings.held_out, "--holdout: lights held out one at a time")
       ->capture_default_str();
@@ -94,8 +96,10 @@ void add_relight(CLI::App& app) {
     settings.out = args->out;
     settings.lights = lights;
     settings.scale = args->scale;
+    settings.grey = args->grey;
     const nlohmann::json summary = pipeline::relight_folder(settings);
-    fmt::print("relit {} frames ({} model) -> {}\n", summary["frames"].size(),
+    fmt::print("relit {} {} frames ({} model) -> {}\n", summary["frames"].size(),
+               summary["colour"].get<bool>() ? "colour" : "grey",
                summary["order"].get<int>() > 0 ? "bi-polynomial" : "Lambertian", args->out);
   });
 }

@@ -24,8 +24,8 @@ struct NaturalArgs : pipeline::NaturalSimulation {
 
 // Flags that only one of the two lightings uses: giving one with the other is an error, not ignored.
 const std::vector<std::string> kDomeOnlyFlags = {
-    "--lights",      "--noise", "--lambda",      "--full-well", "--read-noise",
-    "--exposure-us", "--gain",  "--black-level", "--response",  "--no-cast-shadows"};
+    "--lights", "--noise",       "--lambda",   "--full-well",       "--read-noise", "--exposure-us",
+    "--gain",   "--black-level", "--response", "--no-cast-shadows", "--colour"};
 const std::vector<std::string> kNaturalOnlyFlags = {"--frames", "--environment", "--natural-response",
                                                     "--prior-beta"};
 
@@ -71,7 +71,7 @@ void add_simulate(CLI::App& app) {
   auto args = std::make_shared<Args>();
   CLI::App* sub = app.add_subcommand(
       "simulate",
-      "Render an image stack of a simulated object (--scene, --material) on the simulated dome.\n"
+      "Render an image stack of a simulated object (--scene, --material, --colour) on the simulated dome.\n"
       "\n"
       "--lighting dome (default): one frame per LED of --rig, each LED alone, through the sensor model "
       "(exposure, gain, noise, response, quantisation); light directions and intensities are known, for "
@@ -90,6 +90,7 @@ void add_simulate(CLI::App& app) {
       "\n"
       "Examples:\n"
       "  lightstage simulate --scene bumps --material cook-torrance:roughness=0.3 --out out/bumps\n"
+      "  lightstage simulate --scene shiny-sphere --colour '{type: patches, saturation: 0.6}' --out out/rgb\n"
       "  lightstage simulate --scene bunny --lighting natural --frames 40 --width 128 --height 128 --out "
       "out/natural");
   sub->add_option("--rig", args->rig, "rig description (YAML)")->capture_default_str();
@@ -98,6 +99,13 @@ void add_simulate(CLI::App& app) {
                 "write into an --out that is not empty: the stack's files replace theirs, nothing else is "
                 "removed");
   add_simulate_flags(*sub, args->sim);
+  sub->add_option("--colour,--color", args->sim.options.colour,
+                  "dome: colour of the diffuse albedo (overrides the scene's `colour`), making RGB frames "
+                  "(16-bit PNGs): r,g,b (e.g. 0.9,0.6,0.3), checker, patches, or the scene key's YAML, e.g. "
+                  "'{type: patches, period_mm: 16, saturation: 0.6, seed: 3}' or '{type: checker, values: "
+                  "[[0.9, 0.3, 0.3], [0.3, 0.3, 0.9]], period_mm: 10}'. Scaled so its BT.601 grey is 1: the "
+                  "grey of a frame is the frame without colour. Dichromatic: the diffuse part takes the "
+                  "colour, specular highlights and mirrors stay white (docs/scene-format.md)");
   sub->add_option("--lighting", args->natural.lighting,
                   "dome (one LED per frame) or natural (random natural lighting per frame, unknown to the "
                   "solver; for solve --method shape-prior)")

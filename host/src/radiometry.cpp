@@ -4,6 +4,7 @@
 #include "lightstage/common/parallel.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -45,10 +46,12 @@ FrameConstants frame_constants(const Frame& frame, const cv::Mat* dark) {
 }
 
 // Converts pixels [begin, end) of one frame into column `column`.
+// Colour frames also leave each pixel's linear (r, g, b), unclamped, in
+// `rgb` at ((p − begin) · frame_count + column) · 3.
 template <typename T, bool kColour>
 void convert_frame(const FrameConstants& k, const std::vector<cv::Point>& pixels, std::size_t begin,
                    std::size_t end, bool clamp_to_one, Eigen::Index column, ObservationMatrix& values,
-                   FlagMatrix& saturated) {
+                   FlagMatrix& saturated, float* rgb, std::size_t frame_count) {
   const cv::Mat& image = *k.image;
   const double scale = k.scale, saturation = k.saturation;
   constexpr int kChannels = kColour ? 3 : 1;
@@ -68,9 +71,14 @@ void convert_frame(const FrameConstants& k, const std::vector<cv::Point>& pixels
       const double b = static_cast<double>(px[0]), g = static_cast<double>(px[1]),
                    r = static_cast<double>(px[2]);
       clipped = b >= saturation || g >= saturation || r >= saturation;
-      value = kRed * ((r - black[2]) / scale / k.intensity.x()) +
-              kGreen * ((g - black[1]) / scale / k.intensity.y()) +
-              kBlue * ((b - black[0]) / scale / k.intensity.z());
+      const double red = (r - black[2]) / scale / k.intensity.x();
+      const double green = (g - black[1]) / scale / k.intensity.y();
+      const double blue = (b - black[0]) / scale / k.intensity.z();
+      value = kRed * red + kGreen * green + kBlue * blue;
+      float* out = rgb + ((p - begin) * frame_count + static_cast<std::size_t>(column)) * 3;
+      out[0] = static_cast<float>(red);
+      out[1] = static_cast<float>(green);
+      out[2] = static_cast<float>(blue);
     } else {
       const double v = static_cast<double>(px[0]);
       clipped = v >= saturation;
@@ -89,26 +97,66 @@ void convert_frame(const FrameConstants& k, const std::vector<cv::Point>& pixels
 // instead writes one value per cache line across the full matrices.
 constexpr std::size_t kPixelBlock = 256;
 
+// The chroma of one pixel (radiometry.hpp) from its frames' linear (r, g, b).
+Eigen::RowVector3f pixel_chroma(const float* rgb, const bool* saturated, std::size_t frame_count,
+                                std::array<std::vector<float>, 3>& ratios) {
+  const auto grey = [&](std::size_t j) {
+    const float* v = rgb + j * 3;
+    return kRed * v[0] + kGreen * v[1] + kBlue * v[2];
+  };
+  double brightest = 0;
+  for (std::size_t j = 0; j < frame_count; ++j)
+    if (!saturated[j]) brightest = std::max(brightest, grey(j));
+  for (auto& r : ratios) r.clear();
+  if (brightest > 0) {
+    for (std::size_t j = 0; j < frame_count; ++j) {
+      const double y = grey(j);
+      if (saturated[j] || !(y >= kChromaMinShare * brightest)) continue;
+      for (int c = 0; c < 3; ++c) ratios[c].push_back(static_cast<float>(rgb[j * 3 + c] / y));
+    }
+  }
+  if (ratios[0].empty()) return Eigen::RowVector3f::Ones();  // never lit: neutral
+  Eigen::RowVector3d chroma;
+  for (int c = 0; c < 3; ++c) {
+    auto& r = ratios[c];
+    const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
+    std::nth_element(r.begin(), mid, r.end());
+    chroma[c] = std::max(0.0f, *mid);
+  }
+  const double chroma_grey = kRed * chroma[0] + kGreen * chroma[1] + kBlue * chroma[2];
+  if (!(chroma_grey > 0)) return Eigen::RowVector3f::Ones();
+  return (chroma / chroma_grey).cast<float>();
+}
+
 template <typename T, bool kColour>
 void convert_pixels(const std::vector<FrameConstants>& frames, const std::vector<cv::Point>& pixels,
-                    std::size_t begin, std::size_t end, bool clamp_to_one, ObservationMatrix& values,
-                    FlagMatrix& saturated) {
+                    std::size_t begin, std::size_t end, bool clamp_to_one, Observations& obs) {
+  std::vector<float> rgb(kColour ? kPixelBlock * frames.size() * 3 : 0);
+  std::array<std::vector<float>, 3> ratios;
   for (std::size_t block = begin; block < end; block += kPixelBlock) {
     const std::size_t block_end = std::min(end, block + kPixelBlock);
     for (std::size_t j = 0; j < frames.size(); ++j)
       convert_frame<T, kColour>(frames[j], pixels, block, block_end, clamp_to_one,
-                                static_cast<Eigen::Index>(j), values, saturated);
+                                static_cast<Eigen::Index>(j), obs.intensities, obs.saturated, rgb.data(),
+                                frames.size());
+    if constexpr (kColour) {
+      for (std::size_t p = block; p < block_end; ++p) {
+        const auto row = static_cast<Eigen::Index>(p);
+        obs.chroma.row(row) = pixel_chroma(rgb.data() + (p - block) * frames.size() * 3,
+                                           obs.saturated.row(row).data(), frames.size(), ratios);
+      }
+    }
   }
 }
 
 template <typename T>
 void convert_pixels(const std::vector<FrameConstants>& frames, bool colour,
                     const std::vector<cv::Point>& pixels, std::size_t begin, std::size_t end,
-                    bool clamp_to_one, ObservationMatrix& values, FlagMatrix& saturated) {
+                    bool clamp_to_one, Observations& obs) {
   if (colour)
-    convert_pixels<T, true>(frames, pixels, begin, end, clamp_to_one, values, saturated);
+    convert_pixels<T, true>(frames, pixels, begin, end, clamp_to_one, obs);
   else
-    convert_pixels<T, false>(frames, pixels, begin, end, clamp_to_one, values, saturated);
+    convert_pixels<T, false>(frames, pixels, begin, end, clamp_to_one, obs);
 }
 
 }  // namespace
@@ -180,23 +228,35 @@ Observations make_observations(const ImageStack& stack, const RadiometryOptions&
   for (const Frame& frame : stack.frames)
     frames.push_back(frame_constants(frame, frame.dark.empty() ? nullptr : &darks.at(frame.dark.data)));
   const bool colour = first.channels() == 3;
+  if (colour) obs.chroma.resize(rows, 3);
   parallel_chunks(obs.pixels.size(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     switch (depth) {
       case CV_8U:
-        convert_pixels<std::uint8_t>(frames, colour, obs.pixels, begin, end, options.clamp_to_one,
-                                     obs.intensities, obs.saturated);
+        convert_pixels<std::uint8_t>(frames, colour, obs.pixels, begin, end, options.clamp_to_one, obs);
         break;
       case CV_16U:
-        convert_pixels<std::uint16_t>(frames, colour, obs.pixels, begin, end, options.clamp_to_one,
-                                      obs.intensities, obs.saturated);
+        convert_pixels<std::uint16_t>(frames, colour, obs.pixels, begin, end, options.clamp_to_one, obs);
         break;
       default:
-        convert_pixels<float>(frames, colour, obs.pixels, begin, end, options.clamp_to_one, obs.intensities,
-                              obs.saturated);
+        convert_pixels<float>(frames, colour, obs.pixels, begin, end, options.clamp_to_one, obs);
         break;
     }
   });
   return obs;
+}
+
+cv::Mat chroma_image(const Observations& obs, const cv::Mat& solved) {
+  if (obs.chroma.rows() == 0) return {};
+  if (obs.chroma.rows() != static_cast<Eigen::Index>(obs.pixels.size()))
+    fail("radiometry: {} chroma rows for {} pixels", obs.chroma.rows(), obs.pixels.size());
+  cv::Mat out(obs.size, CV_32FC3, cv::Scalar::all(0));
+  for (std::size_t p = 0; p < obs.pixels.size(); ++p) {
+    const cv::Point at = obs.pixels[p];
+    if (!solved.empty() && solved.at<std::uint8_t>(at) == 0) continue;
+    const auto row = static_cast<Eigen::Index>(p);
+    out.at<cv::Vec3f>(at) = cv::Vec3f(obs.chroma(row, 2), obs.chroma(row, 1), obs.chroma(row, 0));
+  }
+  return out;
 }
 
 }  // namespace lightstage

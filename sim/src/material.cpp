@@ -30,7 +30,106 @@ const char* kind_name(AlbedoTexture::Kind kind) {
   return "?";
 }
 
+const char* kind_name(ColourTexture::Kind kind) {
+  switch (kind) {
+    case ColourTexture::Kind::kConstant:
+      return "constant";
+    case ColourTexture::Kind::kChecker:
+      return "checker";
+    case ColourTexture::Kind::kPatches:
+      return "patches";
+  }
+  return "?";
+}
+
+nlohmann::json rgb_json(const Vec3& rgb) { return {rgb.x(), rgb.y(), rgb.z()}; }
+
+// HSV (hue in turns, value 1) to linear r, g, b.
+Vec3 hsv_rgb(double hue, double saturation) {
+  const double h6 = 6.0 * (hue - std::floor(hue));
+  const int sector = std::min(5, static_cast<int>(h6));
+  const double f = h6 - sector;
+  const double p = 1 - saturation, q = 1 - saturation * f, t = 1 - saturation * (1 - f);
+  switch (sector) {
+    case 0:
+      return {1, t, p};
+    case 1:
+      return {q, 1, p};
+    case 2:
+      return {p, 1, t};
+    case 3:
+      return {p, q, 1};
+    case 4:
+      return {t, p, 1};
+    default:
+      return {1, p, q};
+  }
+}
+
 }  // namespace
+
+Vec3 normalised_tint(const Vec3& rgb, const std::string& what) {
+  if (!rgb.allFinite() || rgb.minCoeff() < 0) {
+    fail("{}: a colour [r, g, b] needs finite values >= 0, got [{}, {}, {}]", what, rgb.x(), rgb.y(),
+         rgb.z());
+  }
+  const double grey = bt601_grey(rgb);
+  if (!(grey > 1e-6))
+    fail("{}: the colour [{}, {}, {}] is black; it has no hue", what, rgb.x(), rgb.y(), rgb.z());
+  return rgb / grey;
+}
+
+Vec3 ColourTexture::eval(double x_mm, double y_mm) const {
+  switch (kind) {
+    case Kind::kConstant:
+      return normalised_tint(a, "colour");
+    case Kind::kChecker: {
+      const auto i = cell(x_mm / period_mm) + cell(y_mm / period_mm);
+      return normalised_tint((i % 2 == 0) ? a : b, "colour");
+    }
+    case Kind::kPatches: {
+      // A key apart from the albedo patches': with the same seed and period
+      // the cells coincide but hue and albedo are independent.
+      const auto ix = static_cast<std::uint64_t>(cell(x_mm / period_mm));
+      const auto iy = static_cast<std::uint64_t>(cell(y_mm / period_mm));
+      const double hue = hash_unit(seed * 0xc2b2ae3d27d4eb4fULL + ix + 0x51ed27, iy);
+      return normalised_tint(hsv_rgb(hue, saturation), "colour");
+    }
+  }
+  return Vec3::Ones();
+}
+
+void ColourTexture::check() const {
+  normalised_tint(a, kind == Kind::kConstant ? "colour" : "colour: values[0]");
+  if (kind == Kind::kChecker) normalised_tint(b, "colour: values[1]");
+  if (!(period_mm > 0 && std::isfinite(period_mm))) {
+    fail("colour: field 'period_mm' must be positive, got {}", period_mm);
+  }
+  if (!(saturation >= 0 && saturation <= 1)) {
+    fail("colour: field 'saturation' must be in [0, 1], got {}", saturation);
+  }
+}
+
+nlohmann::json ColourTexture::describe() const {
+  nlohmann::json j{{"type", kind_name(kind)}};
+  switch (kind) {
+    case Kind::kConstant:
+      j["value"] = rgb_json(a);
+      j["tint"] = rgb_json(normalised_tint(a, "colour"));
+      break;
+    case Kind::kChecker:
+      j["values"] = {rgb_json(a), rgb_json(b)};
+      j["tints"] = {rgb_json(normalised_tint(a, "colour")), rgb_json(normalised_tint(b, "colour"))};
+      j["period_mm"] = period_mm;
+      break;
+    case Kind::kPatches:
+      j["period_mm"] = period_mm;
+      j["saturation"] = saturation;
+      j["seed"] = seed;
+      break;
+  }
+  return j;
+}
 
 double AlbedoTexture::eval(double x_mm, double y_mm) const {
   switch (kind) {
@@ -95,6 +194,7 @@ double Material::shading(double x_mm, double y_mm, const Vec3& n, const Vec3& l,
 
 nlohmann::json Material::describe() const {
   nlohmann::json j{{"preset", preset}, {"kd", kd}, {"ks", ks}, {"albedo", albedo.describe()}};
+  if (colour) j["colour"] = colour->describe();
   j["diffuse"] = diffuse ? diffuse->describe() : "none";
   j["specular"] = specular ? specular->describe() : "none";
   return j;

@@ -1,6 +1,7 @@
 #include "lightstage/sim/natural_capture.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/log.hpp"
 
 #include <fmt/format.h>
 
@@ -126,6 +127,12 @@ NaturalCapture capture_natural(const cv::Mat& normals, const cv::Mat& albedo, co
 NaturalCapture simulate_natural(const Rig& rig, const SimulateOptions& simulate,
                                 const NaturalCaptureOptions& options, const FrameProgress& on_frames) {
   const World world(rig, simulate);
+  if (world.has_colour()) {
+    logger("sim")->warn(
+        "natural lighting renders grey: scene '{}' has a colour, left out (the frames are its "
+        "BT.601 grey)",
+        world.scene().name);
+  }
   const Renderer& renderer = world.renderer();
   NaturalCapture out = capture_natural(renderer.ground_truth().normals, renderer.albedo_map(),
                                        renderer.mask(), options, simulate.threads, on_frames);

@@ -25,6 +25,7 @@ Renderer::Renderer(const Scene& scene, const Camera& camera, const Vec3& object_
   mask_ = cv::Mat::zeros(h, w, CV_8UC1);
   truth_.normals = cv::Mat::zeros(h, w, CV_32FC3);
   truth_.depth = cv::Mat::zeros(h, w, CV_32FC1);
+  if (scene_.material.colour) tint_ = cv::Mat::zeros(h, w, CV_64FC3);
   const bool mirror_material = scene_.material.is_mirror();
   parallel_for(h, threads_, [&](int r) {
     for (int c = 0; c < w; ++c) {
@@ -35,6 +36,10 @@ Renderer::Renderer(const Scene& scene, const Camera& camera, const Vec3& object_
       px.point = hit->point;
       px.normal = hit->normal;
       px.albedo = scene_.material.albedo.eval(hit->point.x(), hit->point.y());
+      if (!tint_.empty()) {
+        const Vec3 rgb = scene_.material.colour->eval(hit->point.x(), hit->point.y());
+        tint_.at<cv::Vec3d>(r, c) = cv::Vec3d(rgb.z(), rgb.y(), rgb.x());  // BGR
+      }
       mask_.at<std::uint8_t>(r, c) = 255;
       truth_.normals.at<cv::Vec3f>(r, c) =
           cv::Vec3f(static_cast<float>(hit->normal.x()), static_cast<float>(hit->normal.y()),
@@ -204,52 +209,98 @@ void Renderer::add_mirror(const Vec3& led, double scale, cv::Mat& out) const {
 }
 
 cv::Mat Renderer::render(const std::vector<LightSource>& lights) const {
+  cv::Mat out;
+  shade(lights, &out, nullptr);
+  return out;
+}
+
+void Renderer::render_parts(const std::vector<LightSource>& lights, cv::Mat* diffuse,
+                            cv::Mat* specular) const {
+  shade(lights, diffuse, specular);
+}
+
+cv::Mat Renderer::render_colour(const std::vector<LightSource>& lights) const {
+  cv::Mat diffuse, specular;
+  shade(lights, &diffuse, &specular);
   const int w = camera_.width, h = camera_.height;
-  cv::Mat out = cv::Mat::zeros(h, w, CV_64FC1);
+  cv::Mat out(h, w, CV_64FC3);
+  for (int r = 0; r < h; ++r) {
+    const double* d = diffuse.ptr<double>(r);
+    const double* s = specular.ptr<double>(r);
+    const auto* t = tint_.empty() ? nullptr : tint_.ptr<cv::Vec3d>(r);
+    auto* o = out.ptr<cv::Vec3d>(r);
+    for (int c = 0; c < w; ++c) {
+      for (int k = 0; k < 3; ++k) o[c][k] = (t ? d[c] * t[c][k] : d[c]) + s[c];
+    }
+  }
+  return out;
+}
+
+void Renderer::shade(const std::vector<LightSource>& lights, cv::Mat* out_mat, cv::Mat* specular_mat) const {
+  const int w = camera_.width, h = camera_.height;
+  *out_mat = cv::Mat::zeros(h, w, CV_64FC1);
+  cv::Mat& out = *out_mat;
+  const bool split = specular_mat != nullptr;
+  if (split) *specular_mat = cv::Mat::zeros(h, w, CV_64FC1);
+  cv::Mat& white = split ? *specular_mat : out;  // where the untinted part goes
   const Material& m = scene_.material;
   const bool mirror_material = m.is_mirror();
-  const bool has_lobes = (m.diffuse && m.kd != 0) || (m.specular && !mirror_material && m.ks != 0);
+  const bool has_diffuse = m.diffuse && m.kd != 0;
+  const bool has_specular = m.specular && !mirror_material && m.ks != 0;
   std::vector<Vec3> leds;
   for (const auto& light : lights) leds.push_back(light.position_mm - object_position_);
-  parallel_for(h, threads_, [&](int r) {
-    auto* row = out.ptr<double>(r);
-    for (int c = 0; c < w; ++c) {
-      const Pixel& px = pixels_[static_cast<std::size_t>(r) * w + c];
-      if (!px.hit) continue;
-      double sum = 0;
-      if (!has_lobes) continue;
-      for (std::size_t k = 0; k < lights.size(); ++k) {
-        if (lights[k].intensity == 0) continue;
-        {
+  if (has_diffuse || has_specular) {
+    parallel_for(h, threads_, [&](int r) {
+      auto* row = out.ptr<double>(r);
+      auto* spec_row = split ? specular_mat->ptr<double>(r) : nullptr;
+      for (int c = 0; c < w; ++c) {
+        const Pixel& px = pixels_[static_cast<std::size_t>(r) * w + c];
+        if (!px.hit) continue;
+        double sum = 0, spec_sum = 0;
+        for (std::size_t k = 0; k < lights.size(); ++k) {
+          if (lights[k].intensity == 0) continue;
           Vec3 l;
           double e, distance;
           light_at(leds[k], px.point, &l, &e, &distance);
           const double cos_l = px.normal.dot(l);
-          if (cos_l > 0) {
-            double f = 0;
-            if (m.diffuse && m.kd != 0) f += m.kd * px.albedo * m.diffuse->eval(px.normal, l, px.view);
-            if (m.specular && !mirror_material && m.ks != 0)
-              f += m.ks * m.specular->eval(px.normal, l, px.view);
-            if (f > 0 && !(scene_.cast_shadows && scene_.shape->occluded(px.point, l, distance))) {
+          if (cos_l <= 0) continue;
+          const double fd = has_diffuse ? m.kd * px.albedo * m.diffuse->eval(px.normal, l, px.view) : 0.0;
+          const double fs = has_specular ? m.ks * m.specular->eval(px.normal, l, px.view) : 0.0;
+          const double f = fd + fs;
+          if (f > 0 && !(scene_.cast_shadows && scene_.shape->occluded(px.point, l, distance))) {
+            if (split) {
+              sum += lights[k].intensity * e * fd * cos_l;
+              spec_sum += lights[k].intensity * e * fs * cos_l;
+            } else {
               sum += lights[k].intensity * e * f * cos_l;
             }
           }
         }
+        row[c] = sum;
+        if (split) spec_row[c] = spec_sum;
       }
-      row[c] = sum;
-    }
-  });
+    });
+  }
   if (mirror_material && !coverage_.empty()) {
     double on = 0;
     for (const auto& light : lights) on += light.intensity;
-    out += coverage_ * (on * scene_.environment_radiance * m.mirror_reflectance());
+    white += coverage_ * (on * scene_.environment_radiance * m.mirror_reflectance());
   }
   if (mirror_material) {
     for (std::size_t k = 0; k < lights.size(); ++k) {
       if (lights[k].intensity == 0) continue;
-      add_mirror(leds[k], lights[k].intensity * scene_.led_radiance * m.mirror_reflectance(), out);
+      add_mirror(leds[k], lights[k].intensity * scene_.led_radiance * m.mirror_reflectance(), white);
     }
   }
+}
+
+cv::Mat Renderer::tint_map() const {
+  cv::Mat out = cv::Mat::zeros(camera_.height, camera_.width, CV_32FC3);
+  for (int r = 0; r < camera_.height; ++r)
+    for (int c = 0; c < camera_.width; ++c) {
+      if (!pixels_[static_cast<std::size_t>(r) * camera_.width + c].hit) continue;
+      out.at<cv::Vec3f>(r, c) = tint_.empty() ? cv::Vec3f(1, 1, 1) : cv::Vec3f(tint_.at<cv::Vec3d>(r, c));
+    }
   return out;
 }
 

@@ -1,11 +1,16 @@
 #include "lightstage/sim/scene_file.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/printable.hpp"
 #include "lightstage/common/yaml_field.hpp"
+
+#include <fmt/format.h>
 
 #include <yaml-cpp/yaml.h>
 
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -125,6 +130,112 @@ AlbedoTexture parse_albedo(const Field& f) {
   return t;
 }
 
+// [r, g, b] (a list) or "r,g,b" (a plain scalar): not negative, not black.
+Vec3 parse_rgb(const Field& f) {
+  Vec3 rgb;
+  if (f.is_scalar()) {
+    const std::string text = f.text();
+    std::istringstream in(text);
+    std::string part;
+    std::vector<double> values;
+    while (std::getline(in, part, ',')) {
+      char* end = nullptr;
+      const double v = std::strtod(part.c_str(), &end);
+      const std::string rest = end == nullptr ? part : std::string(end);
+      if (end == part.c_str() || rest.find_first_not_of(" \t") != std::string::npos) {
+        f.error("cannot read '" + printable(part) + "' of '" + printable(text) +
+                "' as a number (a colour is r,g,b or [r, g, b])");
+      }
+      values.push_back(v);
+    }
+    if (values.size() != 3 || text.back() == ',')
+      f.error("expected a colour r,g,b (or [r, g, b]), got '" + printable(text) + "'");
+    rgb = Vec3(values[0], values[1], values[2]);
+  } else {
+    if (f.size() != 3) f.error("expected a colour [r, g, b]");
+    rgb = Vec3(f.at(0).number(), f.at(1).number(), f.at(2).number());
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (!(rgb[i] >= 0 && std::isfinite(rgb[i]))) {
+      f.error(
+          fmt::format("colour values must be finite and >= 0, got [{}, {}, {}]", rgb.x(), rgb.y(), rgb.z()));
+    }
+  }
+  if (!(bt601_grey(rgb) > 1e-6))
+    f.error(fmt::format("the colour [{}, {}, {}] is black: it has no hue", rgb.x(), rgb.y(), rgb.z()));
+  return rgb;
+}
+
+// The `colour` key (and the --colour spec): [r, g, b], "r,g,b", a type name
+// (its defaults) or a mapping {type: constant | checker | patches, ...}.
+ColourTexture parse_colour_field(const Field& f) {
+  ColourTexture t;
+  std::string type;
+  if (f.is_map()) {
+    f.only_keys({"type", "value", "values", "period_mm", "saturation", "seed"});
+    type = f["type"].text();
+  } else if (f.is_scalar() && !f.text().empty() &&
+             std::isalpha(static_cast<unsigned char>(f.text().front())) != 0) {
+    type = f.text();
+    if (type != "checker" && type != "patches") {
+      f.error("must be a colour [r, g, b], r,g,b, checker, patches or a mapping {type: ...}, got '" + type +
+              "'");
+    }
+  } else {
+    t.a = t.b = parse_rgb(f);
+    return t;
+  }
+  // Keys that only some types take: given with another, they would be ignored.
+  auto only_for = [&](const std::string& key, const std::set<std::string>& types) {
+    if (f.is_map() && f.has(key) && !types.contains(type)) {
+      std::string list;
+      for (const auto& name : types) list += (list.empty() ? "" : " or ") + name;
+      f[key].error("applies to type " + list + " only, not '" + type + "'");
+    }
+  };
+  if (type == "constant") {
+    t.kind = ColourTexture::Kind::kConstant;
+  } else if (type == "checker") {
+    t.kind = ColourTexture::Kind::kChecker;
+  } else if (type == "patches") {
+    t.kind = ColourTexture::Kind::kPatches;
+  } else {
+    f["type"].error("must be constant, checker or patches, got '" + type + "'");
+  }
+  only_for("value", {"constant"});
+  only_for("values", {"checker"});
+  only_for("period_mm", {"checker", "patches"});
+  only_for("saturation", {"patches"});
+  only_for("seed", {"patches"});
+  if (t.kind == ColourTexture::Kind::kConstant) {
+    t.a = t.b = parse_rgb(f["value"]);
+    return t;
+  }
+  if (t.kind == ColourTexture::Kind::kChecker) {
+    t.a = Vec3(0.9, 0.3, 0.3);
+    t.b = Vec3(0.3, 0.3, 0.9);
+    if (f.is_map() && f.has("values")) {
+      const Field v = f["values"];
+      if (v.size() != 2) v.error("expected two colours [[r, g, b], [r, g, b]]");
+      t.a = parse_rgb(v.at(0));
+      t.b = parse_rgb(v.at(1));
+    }
+  }
+  if (f.is_map() && f.has("period_mm")) t.period_mm = f["period_mm"].positive();
+  if (f.is_map() && f.has("saturation")) {
+    t.saturation = f["saturation"].number();
+    if (!(t.saturation >= 0 && t.saturation <= 1))
+      f["saturation"].error(fmt::format("must be in [0, 1], got {}", t.saturation));
+  }
+  if (f.is_map() && f.has("seed")) {
+    const int seed = f["seed"].integer();
+    if (seed < 0) f["seed"].error(fmt::format("must not be negative, got {}", seed));
+    t.seed = static_cast<std::uint64_t>(seed);
+  }
+  t.check();
+  return t;
+}
+
 CameraOverrides parse_camera(const Field& f) {
   f.only_keys({"model", "width", "height", "pixel_pitch_mm", "focal_px", "position_mm"});
   CameraOverrides c;
@@ -154,7 +265,7 @@ CameraOverrides parse_camera(const Field& f) {
 
 Scene parse_document(const Field& root, const std::string& source) {
   if (!root.is_map()) root.error("a scene file is a YAML mapping");
-  root.only_keys({"name", "object", "material", "albedo", "camera", "led_radius_mm", "led_radiance",
+  root.only_keys({"name", "object", "material", "albedo", "colour", "camera", "led_radius_mm", "led_radiance",
                   "highlight_blur_px", "cast_shadows", "environment_radiance"});
   Scene scene;
   scene.name = root.has("name") ? root["name"].text() : source;
@@ -166,6 +277,7 @@ Scene parse_document(const Field& root, const std::string& source) {
   } catch (const InputError& e) {
     root["material"].error(e.what());
   }
+  if (root.has("colour")) scene.material.colour = parse_colour_field(root["colour"]);
   if (root.has("camera")) scene.camera = parse_camera(root["camera"]);
   if (root.has("led_radius_mm")) scene.led_radius_mm = root["led_radius_mm"].positive();
   if (root.has("led_radiance")) scene.led_radiance = root["led_radiance"].non_negative();
@@ -259,6 +371,12 @@ cast_shadows: true
 
 Scene parse_scene(const std::string& yaml_text, const std::string& source) {
   return parse_yaml(yaml_text, source, [&](const Field& root) { return parse_document(root, source); });
+}
+
+ColourTexture parse_colour(const std::string& spec) {
+  const std::string source = fmt::format("colour '{}'", printable(spec));
+  if (spec.empty()) fail("{}: empty (give r,g,b, [r, g, b], checker, patches or {{type: ...}})", source);
+  return parse_yaml(spec, source, [](const Field& root) { return parse_colour_field(root); });
 }
 
 Scene load_scene(const std::filesystem::path& path) {

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <random>
+#include <vector>
 
 namespace lightstage::sim {
 namespace {
@@ -134,17 +135,34 @@ Sensor::Sensor(const SensorOptions& options, const CameraDefaults& rig_camera) :
   // The pixel well fills at the rig gain's full scale: below that gain the
   // brightest code is under full scale, and that code is where clipping starts.
   clip_y_ = std::min(1.0, gain_ratio_);
-  saturation_code_ = std::min(
-      max_code_, std::nearbyint((options.black_level + options.response.apply(clip_y_) * full_code_) / step_)) *
-                     step_;
+  saturation_code_ =
+      std::min(max_code_,
+               std::nearbyint((options.black_level + options.response.apply(clip_y_) * full_code_) / step_)) *
+      step_;
 }
 
 cv::Mat Sensor::expose(const cv::Mat& shading, std::uint64_t seed, std::uint64_t frame_index) const {
-  CV_Assert(shading.channels() == 1 && (shading.depth() == CV_64F || shading.depth() == CV_32F));
+  CV_Assert((shading.channels() == 1 || shading.channels() == 3) &&
+            (shading.depth() == CV_64F || shading.depth() == CV_32F));
+  if (shading.channels() == 1) return expose_plane(shading, frame_seed(seed, frame_index));
+  std::vector<cv::Mat> planes;
+  cv::split(shading, planes);  // B, G, R
+  const std::uint64_t frame = frame_seed(seed, frame_index);
+  std::vector<cv::Mat> frames(3);
+  for (int rgb = 0; rgb < 3; ++rgb) {
+    const auto plane = static_cast<std::size_t>(2 - rgb);
+    frames[plane] = expose_plane(planes[plane], frame_seed(frame, static_cast<std::uint64_t>(rgb) + 1));
+  }
+  cv::Mat out;
+  cv::merge(frames, out);
+  return out;
+}
+
+cv::Mat Sensor::expose_plane(const cv::Mat& shading, std::uint64_t rng_seed) const {
   cv::Mat s;
   shading.convertTo(s, CV_64F);
   cv::Mat out(s.size(), CV_16UC1);
-  std::mt19937_64 rng(frame_seed(seed, frame_index));
+  std::mt19937_64 rng(rng_seed);
   std::normal_distribution<double> normal(0.0, 1.0);
   const double fw = options_.full_well_e;
   const double electrons_per_shading = options_.full_scale_fraction * exposure_ratio_ * fw;

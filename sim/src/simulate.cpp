@@ -14,7 +14,12 @@ namespace {
 
 Scene build_scene(const SimulateOptions& options) {
   Scene scene = resolve_scene(options.scene);
-  if (!options.material.empty()) scene.material = parse_material(options.material, scene.material.albedo);
+  if (!options.material.empty()) {
+    const auto colour = scene.material.colour;  // --material replaces the lobes only
+    scene.material = parse_material(options.material, scene.material.albedo);
+    scene.material.colour = colour;
+  }
+  if (!options.colour.empty()) scene.material.colour = parse_colour(options.colour);
   if (options.cast_shadows) scene.cast_shadows = *options.cast_shadows;
   if (options.led_radius_mm) scene.led_radius_mm = *options.led_radius_mm;
   return scene;
@@ -31,6 +36,7 @@ void SimulateOptions::check() const {
   if (led_radius_mm && !(*led_radius_mm > 0))
     fail("simulate: led_radius_mm must be positive, got {}", *led_radius_mm);
   if (!material.empty()) parse_material(material);
+  if (!colour.empty()) parse_colour(colour);
   sensor.check();
 }
 
@@ -42,18 +48,24 @@ World::World(const Rig& rig, const SimulateOptions& options)
       renderer_(scene_, make_camera(rig.camera, scene_.camera, options.width, options.height),
                 rig.object_position_mm, options.light_model, options.threads) {}
 
-cv::Mat World::render(const std::vector<std::pair<std::size_t, double>>& leds_on) const {
+std::vector<LightSource> World::light_sources(
+    const std::vector<std::pair<std::size_t, double>>& leds_on) const {
   std::vector<LightSource> lights;
   for (const auto& [index, weight] : leds_on) {
     if (index >= rig_.leds.size())
       fail("simulate: LED index {} outside the rig's {} LEDs", index, rig_.leds.size());
     lights.push_back({rig_.leds[index].position_mm, weight * rig_.leds[index].relative_intensity});
   }
-  return renderer_.render(lights);
+  return lights;
+}
+
+cv::Mat World::render(const std::vector<std::pair<std::size_t, double>>& leds_on) const {
+  return renderer_.render(light_sources(leds_on));
 }
 
 Frame World::frame(std::size_t index) const {
-  const cv::Mat shading = render({{index, 1.0}});
+  const auto on = light_sources({{index, 1.0}});
+  const cv::Mat shading = renderer_.has_colour() ? renderer_.render_colour(on) : renderer_.render(on);
   const Led& led = rig_.leds.at(index);
   Frame f;
   f.filename = fmt::format("{:03}.png", index + 1);
@@ -120,6 +132,7 @@ nlohmann::json describe(const SimulateOptions& options) {
                    {"seed", options.seed},
                    {"sensor", sensor}};
   if (!options.material.empty()) j["material"] = options.material;
+  if (!options.colour.empty()) j["colour"] = options.colour;
   if (options.width) j["width"] = *options.width;
   if (options.height) j["height"] = *options.height;
   if (options.cast_shadows) j["cast_shadows"] = *options.cast_shadows;

@@ -42,6 +42,52 @@ TEST(HostRadiometry, ColourIsNormalisedPerChannelThenGreyBt601InBgrOrder) {
   EXPECT_NEAR(obs.lights(0, 0), 2.0 / std::sqrt(5.0), 1e-12);
 }
 
+// A colour pixel's chroma is its diffuse colour even where a white highlight
+// lights some frames brighter than the rest, a saturated frame is left out,
+// and the chroma's BT.601 grey is 1.
+TEST(HostRadiometry, ChromaIsTheMedianColourOfTheLitFramesAndIgnoresAWhiteHighlight) {
+  ImageStack stack;
+  const cv::Vec3d diffuse(0.2, 0.5, 0.9);  // B, G, R shares of the albedo
+  const double shading[] = {0.2, 0.35, 0.5, 0.6, 0.45, 0.3, 0.25, 0.4, 0.55};
+  for (int i = 0; i < 9; ++i) {
+    Frame frame;
+    frame.filename = "f" + std::to_string(i);
+    frame.image = cv::Mat(1, 2, CV_16UC3, cv::Scalar::all(0));
+    frame.light_direction = Vec3(std::cos(i), std::sin(i), 1.0);
+    cv::Vec3d value = diffuse * shading[i];
+    if (i == 3 || i == 4) value += cv::Vec3d::all(0.8);  // a white highlight in two frames of nine
+    for (int c = 0; c < 3; ++c)
+      frame.image.at<cv::Vec3w>(0, 0)[c] = cv::saturate_cast<std::uint16_t>(value[c] * 30000);
+    frame.image.at<cv::Vec3w>(0, 1) = i == 5 ? cv::Vec3w(65535, 65535, 65535) : cv::Vec3w(100, 100, 100);
+    stack.frames.push_back(frame);
+  }
+  const Observations obs = make_observations(stack);
+  ASSERT_EQ(obs.chroma.rows(), 2);
+  const double grey = kR * diffuse[2] + kG * diffuse[1] + kB * diffuse[0];
+  EXPECT_NEAR(obs.chroma(0, 0), diffuse[2] / grey, 1e-3);  // r
+  EXPECT_NEAR(obs.chroma(0, 1), diffuse[1] / grey, 1e-3);  // g
+  EXPECT_NEAR(obs.chroma(0, 2), diffuse[0] / grey, 1e-3);  // b
+  EXPECT_NEAR(kR * obs.chroma(0, 0) + kG * obs.chroma(0, 1) + kB * obs.chroma(0, 2), 1.0, 1e-6);
+  // Grey apart from one saturated (white, clipped) frame: neutral.
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(obs.chroma(1, c), 1.0 / (kR + kG + kB), 1e-6) << c;
+  // As an image: BGR, zero where not solved.
+  cv::Mat solved(1, 2, CV_8UC1, cv::Scalar::all(255));
+  solved.at<std::uint8_t>(0, 1) = 0;
+  const cv::Mat image = chroma_image(obs, solved);
+  ASSERT_EQ(image.type(), CV_32FC3);
+  EXPECT_FLOAT_EQ(image.at<cv::Vec3f>(0, 0)[0], obs.chroma(0, 2));
+  EXPECT_FLOAT_EQ(image.at<cv::Vec3f>(0, 0)[2], obs.chroma(0, 0));
+  EXPECT_EQ(image.at<cv::Vec3f>(0, 1), cv::Vec3f(0, 0, 0));
+}
+
+TEST(HostRadiometry, GreyStacksHaveNoChroma) {
+  ImageStack stack = colour_stack();
+  for (auto& frame : stack.frames) frame.image = cv::Mat(2, 3, CV_16UC1, cv::Scalar::all(500));
+  const Observations obs = make_observations(stack);
+  EXPECT_EQ(obs.chroma.rows(), 0);
+  EXPECT_TRUE(chroma_image(obs).empty());
+}
+
 TEST(HostRadiometry, ClampsToOneUnlessAskedNot) {
   ImageStack stack = colour_stack();
   for (auto& frame : stack.frames) frame.light_intensity = Vec3(0.25, 0.25, 0.25);

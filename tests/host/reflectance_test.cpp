@@ -112,5 +112,41 @@ TEST(Relight, LambertianFallbackAndBadInput) {
             std::string::npos);
 }
 
+// Colour: the polynomial part takes the chroma, the specular lobe stays white,
+// and the grey of the colour image is the grey relighting.
+TEST(Relight, ColourTakesTheChromaOnThePolynomialAndKeepsTheLobeWhite) {
+  RelightModel model;
+  model.normals = cv::Mat(1, 2, CV_32FC3, cv::Scalar(0, 0, 1));
+  model.solved = cv::Mat(1, 2, CV_8UC1, cv::Scalar(255));
+  model.albedo = cv::Mat(1, 2, CV_32FC1, cv::Scalar(0.4));
+  model.order = 1;
+  model.lobe_width = 0.2;
+  model.coefficients = cv::Mat(1, 2, CV_32FC(5), cv::Scalar::all(0));
+  // Pixel 0: ρ = 0.3 + lobe · 0.5; pixel 1: no lobe.
+  model.coefficients.ptr<float>(0)[0] = 0.3f;
+  model.coefficients.ptr<float>(0)[4] = 0.5f;
+  model.coefficients.ptr<float>(0)[5] = 0.3f;
+  const cv::Vec3f chroma(0.6f, 0.9f, 1.3f);  // B G R
+  model.chroma = cv::Mat(1, 2, CV_32FC3, cv::Scalar(chroma[0], chroma[1], chroma[2]));
+  const Vec3 light(0, 0.6, 0.8);
+  const cv::Mat grey = relight(model, light);
+  const cv::Mat colour = relight_colour(model, light);
+  ASSERT_EQ(colour.type(), CV_32FC3);
+  const Vec3 h = (light.normalized() + Vec3::UnitZ()).normalized();
+  const double lobe = 0.5 * specular_lobe(h.z(), 0.2), nl = 0.8;
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(colour.at<cv::Vec3f>(0, 0)[c], (chroma[c] * 0.3 + lobe) * nl, 1e-6) << c;
+    EXPECT_NEAR(colour.at<cv::Vec3f>(0, 1)[c], chroma[c] * 0.3 * nl, 1e-6) << c;
+  }
+  // BT.601 grey of the colour = the grey image (chroma's grey is not 1 here: weigh it in).
+  const double chroma_grey = 0.2989 * chroma[2] + 0.5870 * chroma[1] + 0.1140 * chroma[0];
+  const cv::Vec3f c0 = colour.at<cv::Vec3f>(0, 1);
+  EXPECT_NEAR((0.2989 * c0[2] + 0.5870 * c0[1] + 0.1140 * c0[0]) / chroma_grey, grey.at<float>(0, 1), 1e-6);
+  // Without chroma, the grey in every channel.
+  model.chroma.release();
+  const cv::Mat neutral = relight_colour(model, light);
+  for (int c = 0; c < 3; ++c) EXPECT_FLOAT_EQ(neutral.at<cv::Vec3f>(0, 0)[c], grey.at<float>(0, 0));
+}
+
 }  // namespace
 }  // namespace lightstage

@@ -2,6 +2,7 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/version.hpp"
+#include "lightstage/host/io/exr.hpp"
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/normal_map.hpp"
 #include "lightstage/host/io/pfm.hpp"
@@ -110,6 +111,36 @@ TEST(HostSolveFolder, ReadsBackWhatWasWritten) {
   cv::Mat shown;
   png.convertTo(shown, CV_32FC1, 1.0 / 65535);
   EXPECT_LT(cv::norm(folder.display_albedo(), shown, cv::NORM_INF), 1.0 / 65535 + 1e-6);
+}
+
+// A colour stack's result: the colour albedo beside the grey one, read back
+// as the same chroma, shown (and so meshed) in colour, relit in colour.
+TEST(HostSolveFolder, AColourResultKeepsItsChromaThroughTheFiles) {
+  const auto scene = testing::make_scene(20, 10, 8, 3, false);
+  SolveResult result = solve_lambertian(scene.observations, L2Options{});
+  result.chroma = cv::Mat(result.normals.size(), CV_32FC3, cv::Scalar(0.5, 1.0, 1.6));  // B G R
+  const auto dir = testing::scratch_dir() / "out";
+  const auto written = io::write_solve_outputs(dir, result, "/some/input");
+  EXPECT_EQ(written["files"]["albedo_colour"], "albedo_rgb.png");
+  EXPECT_EQ(written["files"]["albedo_colour_float"], "albedo_rgb.pfm");
+  // Grey files as before.
+  EXPECT_EQ(cv::norm(io::read_pfm(dir / "albedo.pfm"), result.albedo, cv::NORM_INF), 0);
+  EXPECT_EQ(io::read_image(dir / "albedo.png").type(), CV_16UC1);
+  const cv::Mat colour = io::read_pfm(dir / "albedo_rgb.pfm");
+  ASSERT_EQ(colour.type(), CV_32FC3);
+  const float a = result.albedo.at<float>(4, 7);
+  EXPECT_FLOAT_EQ(colour.at<cv::Vec3f>(4, 7)[2], 1.6f * a);  // R
+  EXPECT_EQ(io::read_image(dir / "albedo_rgb.png").type(), CV_16UC3);
+  const cv::Mat exr = io::read_exr(dir / "albedo.exr", {"R", "Y"});
+  EXPECT_FLOAT_EQ(exr.at<cv::Vec2f>(4, 7)[0], 1.6f * a);
+  EXPECT_FLOAT_EQ(exr.at<cv::Vec2f>(4, 7)[1], a);
+
+  const io::SolveFolder folder = io::read_solve_folder(dir);
+  ASSERT_EQ(folder.chroma.type(), CV_32FC3);
+  EXPECT_LT(cv::norm(folder.chroma, result.chroma, cv::NORM_INF), 1e-6);
+  const cv::Mat shown = folder.display_albedo();
+  ASSERT_EQ(shown.type(), CV_32FC3);
+  EXPECT_NEAR(shown.at<cv::Vec3f>(4, 7)[0], std::min(1.0, 0.5 * a / folder.albedo_png_scale), 1e-6);
 }
 
 TEST(HostSolveFolder, AlbedoFallsBackToThePngTimesItsScale) {

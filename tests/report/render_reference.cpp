@@ -1,7 +1,7 @@
 // report_render_reference RESULT_DIR X Y Z OUT.pfm
 // Writes the C++ reference of what the report's viewer shows for the light
 // (X, Y, Z): report::relight over the same files (viewer_data.hpp), as a float
-// PFM. The browser test compares the canvas with it when `lightstage relight`
+// PFM (in colour for a colour result). The browser test compares the canvas with it when `lightstage relight`
 // is not built.
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/pfm.hpp"
@@ -26,7 +26,9 @@ int main(int argc, char** argv) {
     const auto model =
         lightstage::report::load_surface_model(lightstage::io::read_solve_folder(result), 1 << 30, notes);
     const lightstage::Vec3 light(std::stod(argv[2]), std::stod(argv[3]), std::stod(argv[4]));
-    lightstage::io::write_pfm(argv[5], lightstage::report::relight(model, light));
+    lightstage::io::write_pfm(argv[5], model.chroma.empty()
+                                           ? lightstage::report::relight(model, light)
+                                           : lightstage::report::relight_colour(model, light));
   } catch (const std::exception& e) {
     std::cerr << "report_render_reference: " << e.what() << "\n";
     return 1;

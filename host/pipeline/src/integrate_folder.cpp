@@ -14,12 +14,13 @@
 namespace lightstage::pipeline {
 namespace {
 
+// Grey or colour (BGR), as floats in [0, 1].
 cv::Mat read_albedo(const std::filesystem::path& path) {
   const cv::Mat image = io::read_image(path);
-  if (image.type() == CV_32FC1) return image;
-  if (image.channels() != 1) fail("{}: albedo must be a grey image", path.string());
+  if (image.depth() == CV_32F) return image;
   cv::Mat out;
-  image.convertTo(out, CV_32FC1, image.depth() == CV_16U ? 1.0 / 65535 : 1.0 / 255);
+  image.convertTo(out, CV_MAKETYPE(CV_32F, image.channels()),
+                  image.depth() == CV_16U ? 1.0 / 65535 : 1.0 / 255);
   return out;
 }
 

@@ -16,14 +16,22 @@ nlohmann::json relight_folder(const RelightSettings& settings) {
   if (settings.lights.empty()) fail("relight: give at least one --light x,y,z or --turntable N");
   io::require_separate_output(settings.out, {settings.input});
   const RelightModel model = load_relight_model(settings.input);
+  const bool colour = !model.chroma.empty() && !settings.grey;
   std::vector<cv::Mat> frames;
   std::vector<float> all;
   for (const auto& l : settings.lights) {
-    frames.push_back(relight(model, l));
-    for (int y = 0; y < frames.back().rows; ++y)
-      for (int x = 0; x < frames.back().cols; ++x)
-        if (model.solved.at<std::uint8_t>(y, x) != 0) all.push_back(frames.back().at<float>(y, x));
+    frames.push_back(colour ? relight_colour(model, l) : relight(model, l));
+    const cv::Mat& frame = frames.back();
+    for (int y = 0; y < frame.rows; ++y) {
+      if (model.solved.empty()) break;
+      const float* row = frame.ptr<float>(y);
+      for (int x = 0; x < frame.cols; ++x)
+        if (model.solved.at<std::uint8_t>(y, x) != 0)
+          all.insert(all.end(), row + x * frame.channels(), row + (x + 1) * frame.channels());
+    }
   }
+  // White: the 99.5th percentile of every channel of the object's pixels, so
+  // that saturated colours keep their hue.
   double scale = settings.scale;
   if (!(scale > 0)) {
     scale = 1;
@@ -38,11 +46,12 @@ nlohmann::json relight_folder(const RelightSettings& settings) {
                             {"scale", scale},
                             {"model", model.order > 0 ? "bipolynomial" : "lambert"},
                             {"order", model.order},
+                            {"colour", colour},
                             {"frames", nlohmann::json::array()}};
   for (std::size_t i = 0; i < frames.size(); ++i) {
     cv::Mat scaled = frames[i] / scale, image;
     cv::min(scaled, 1.0, scaled);
-    scaled.convertTo(image, CV_16UC1, 65535.0);
+    scaled.convertTo(image, colour ? CV_16UC3 : CV_16UC1, 65535.0);
     const std::string name = fmt::format("relit_{:03d}.png", i);
     io::write_png16(settings.out / name, image);
     const Vec3 l = settings.lights[i].normalized();

@@ -131,6 +131,8 @@ Observations select_lights(const Observations& obs, const std::vector<int>& keep
   out.size = obs.size;
   out.mask = obs.mask;
   out.pixels = obs.pixels;
+  // The median over every frame: one held-out light barely moves it.
+  out.chroma = obs.chroma;
   const auto m = static_cast<Eigen::Index>(keep.size());
   out.intensities.resize(obs.intensities.rows(), m);
   out.saturated.resize(obs.saturated.rows(), m);

@@ -130,6 +130,7 @@ SolveResult solve_with(const Observations& observations, const SolveSettings& se
                                               result.solved, confidence.scale_deg);
     result.parameters["confidence"] = confidence.to_json();
   }
+  if (observations.chroma.rows() > 0) result.chroma = chroma_image(observations, result.solved);
   // A per-pixel BRDF is refitted to every lit observation at the answer's
   // normal, for relighting (reflectance/relighting_fit.hpp).
   if (!result.coefficients.empty() && result.reflectance.is_object() &&

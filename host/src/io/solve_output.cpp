@@ -77,6 +77,16 @@ void write_method_map(const std::filesystem::path& path, const SolveResult& resu
   summary["files"]["method_map"] = path.filename().string();
 }
 
+// albedo · chroma (CV_32FC3, BGR) for a colour result, else empty.
+cv::Mat colour_albedo(const SolveResult& result) {
+  if (result.chroma.empty()) return {};
+  if (result.chroma.type() != CV_32FC3 || result.chroma.size() != result.albedo.size())
+    fail("solve outputs: the chroma must be CV_32FC3 of the albedo's size");
+  cv::Mat albedo3;
+  cv::merge(std::vector<cv::Mat>{result.albedo, result.albedo, result.albedo}, albedo3);
+  return albedo3.mul(result.chroma);
+}
+
 }  // namespace
 
 nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const SolveResult& result,
@@ -105,7 +115,25 @@ nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const Solve
   write_pfm(dir / "albedo.pfm", result.albedo);
   write_pfm(dir / "residual.pfm", result.residual);
   write_exr(dir / "normal.exr", result.normals, {"R", "G", "B"});  // R = x, as in normal.png
-  write_exr(dir / "albedo.exr", result.albedo, {"Y"});
+  const cv::Mat colour = colour_albedo(result);
+  if (colour.empty()) {
+    write_exr(dir / "albedo.exr", result.albedo, {"Y"});
+  } else {
+    write_pfm(dir / "albedo_rgb.pfm", colour);
+    cv::Mat colour16;
+    cv::Mat shown = colour / scale;
+    cv::min(shown, 1.0, shown);
+    cv::max(shown, 0.0, shown);
+    shown.convertTo(colour16, CV_16UC3, 65535.0);
+    write_png16(dir / "albedo_rgb.png", colour16);
+    // EXR viewers show R G B; Y stays the grey albedo the solvers fitted.
+    std::vector<cv::Mat> planes;
+    cv::split(colour, planes);
+    planes.push_back(result.albedo);
+    cv::Mat bgry;
+    cv::merge(planes, bgry);
+    write_exr(dir / "albedo.exr", bgry, {"B", "G", "R", "Y"});
+  }
 
   nlohmann::json summary = result.summary.to_json();
   summary["parameters"] = result.parameters;
@@ -119,6 +147,10 @@ nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const Solve
                       {"albedo", "albedo.png"},     {"albedo_float", "albedo.pfm"},
                       {"residual", "residual.pfm"}, {"normals_exr", "normal.exr"},
                       {"albedo_exr", "albedo.exr"}};
+  if (!colour.empty()) {
+    summary["files"]["albedo_colour"] = "albedo_rgb.png";
+    summary["files"]["albedo_colour_float"] = "albedo_rgb.pfm";
+  }
   // Optional per-pixel outputs: confidence and a per-pixel reflectance model (one PFM per coefficient).
   if (!result.confidence.empty()) {
     write_pfm(dir / "confidence.pfm", result.confidence);
@@ -211,11 +243,35 @@ void read_reflectance(SolveFolder& folder) {
   folder.lobe_width = lobe_width;
 }
 
+// albedo_rgb.pfm over the grey albedo: the chroma (neutral where the albedo is 0).
+cv::Mat read_chroma(const fs::path& dir, const SolveFolder& folder) {
+  const fs::path path = dir / "albedo_rgb.pfm";
+  const cv::Mat colour = read_pfm(path);
+  if (colour.type() != CV_32FC3 || colour.size() != folder.albedo.size())
+    fail("{}: expected a colour PFM of {}x{} (normal.png's size)", path.string(), folder.albedo.cols,
+         folder.albedo.rows);
+  cv::Mat chroma(colour.size(), CV_32FC3, cv::Scalar::all(1));
+  for (int y = 0; y < colour.rows; ++y) {
+    for (int x = 0; x < colour.cols; ++x) {
+      const float a = folder.albedo.at<float>(y, x);
+      if (a > 0) chroma.at<cv::Vec3f>(y, x) = colour.at<cv::Vec3f>(y, x) / a;
+    }
+  }
+  return chroma;
+}
+
 }  // namespace
+
+cv::Mat SolveFolder::colour_albedo() const {
+  if (albedo.empty() || chroma.empty()) return albedo;
+  cv::Mat albedo3;
+  cv::merge(std::vector<cv::Mat>{albedo, albedo, albedo}, albedo3);
+  return albedo3.mul(chroma);
+}
 
 cv::Mat SolveFolder::display_albedo() const {
   if (albedo.empty()) return {};
-  cv::Mat shown = albedo / albedo_png_scale;
+  cv::Mat shown = colour_albedo() / albedo_png_scale;
   cv::min(shown, 1.0, shown);
   cv::max(shown, 0.0, shown);
   return shown;
@@ -254,6 +310,7 @@ SolveFolder read_solve_folder(const fs::path& dir) {
                   folder.albedo_png_scale / (png.depth() == CV_16U ? 65535.0 : 255.0));
     folder.albedo_from_png = true;
   }
+  if (!folder.albedo.empty() && fs::exists(dir / "albedo_rgb.pfm")) folder.chroma = read_chroma(dir, folder);
   if (fs::exists(dir / "residual.pfm")) folder.residual = read_float_plane(dir / "residual.pfm", size);
   if (fs::exists(dir / "confidence.pfm")) folder.confidence = read_float_plane(dir / "confidence.pfm", size);
   read_reflectance(folder);

@@ -65,17 +65,24 @@ int relighting_term_count(int order, double lobe_width) {
   return bipolynomial_term_count(order) + (lobe_width > 0 ? 1 : 0);
 }
 
-double evaluate_relighting_brdf(int order, double lobe_roughness, const float* coefficients, double n_dot_h,
-                                double l_dot_h) {
+RelightingBrdfParts evaluate_relighting_parts(int order, double lobe_roughness, const float* coefficients,
+                                              double n_dot_h, double l_dot_h) {
   const int n = order + 1;
-  double rho = 0;
+  RelightingBrdfParts parts;
   for (int i = n - 1; i >= 0; --i) {
     double row = 0;
     for (int j = n - 1; j >= 0; --j) row = row * l_dot_h + coefficients[i * n + j];
-    rho = rho * n_dot_h + row;
+    parts.polynomial = parts.polynomial * n_dot_h + row;
   }
-  if (lobe_roughness > 0) rho += coefficients[n * n] * specular_lobe(n_dot_h, lobe_roughness);
-  return std::max(rho, 0.0);
+  if (lobe_roughness > 0) parts.lobe = coefficients[n * n] * specular_lobe(n_dot_h, lobe_roughness);
+  return parts;
+}
+
+double evaluate_relighting_brdf(int order, double lobe_roughness, const float* coefficients, double n_dot_h,
+                                double l_dot_h) {
+  const RelightingBrdfParts parts =
+      evaluate_relighting_parts(order, lobe_roughness, coefficients, n_dot_h, l_dot_h);
+  return std::max(parts.polynomial + parts.lobe, 0.0);
 }
 
 std::vector<std::string> bipolynomial_term_names(int order) {

@@ -89,15 +89,26 @@ cv::Mat normal_sphere_legend(int size) {
 }
 
 cv::Mat grey(const cv::Mat& values, const cv::Mat& valid, double scale) {
-  check_map(values, valid, CV_32FC1, "grey");
+  const bool colour = values.type() == CV_32FC3;
+  check_map(values, valid, colour ? CV_32FC3 : CV_32FC1, "grey");
   const double s = scale > 0 ? scale : 1.0;
+  const auto byte = [s](float v) {
+    return cv::saturate_cast<std::uint8_t>(std::lround(255.0 * std::clamp(v / s, 0.0, 1.0)));
+  };
   cv::Mat out(values.size(), CV_8UC4, cv::Scalar(0, 0, 0, 0));
   for (int y = 0; y < values.rows; ++y) {
     for (int x = 0; x < values.cols; ++x) {
-      const float v = values.at<float>(y, x);
-      if (!is_valid(valid, y, x) || !std::isfinite(v)) continue;
-      const auto g = cv::saturate_cast<std::uint8_t>(std::lround(255.0 * std::clamp(v / s, 0.0, 1.0)));
-      out.at<cv::Vec4b>(y, x) = {g, g, g, 255};
+      if (!is_valid(valid, y, x)) continue;
+      if (colour) {
+        const cv::Vec3f v = values.at<cv::Vec3f>(y, x);
+        if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) continue;
+        out.at<cv::Vec4b>(y, x) = {byte(v[0]), byte(v[1]), byte(v[2]), 255};
+      } else {
+        const float v = values.at<float>(y, x);
+        if (!std::isfinite(v)) continue;
+        const auto g = byte(v);
+        out.at<cv::Vec4b>(y, x) = {g, g, g, 255};
+      }
     }
   }
   return out;

@@ -29,7 +29,8 @@ cv::Mat normal_colours(const cv::Mat& normals, const cv::Mat& valid);
 // The legend of that code: a unit sphere seen from the camera, `size` pixels square.
 cv::Mat normal_sphere_legend(int size);
 
-// A grey picture of `values` (CV_32FC1) scaled so that `scale` is white.
+// A picture of linear `values` (CV_32FC1 grey, or CV_32FC3 BGR colour) scaled
+// so that `scale` is white.
 cv::Mat grey(const cv::Mat& values, const cv::Mat& valid, double scale);
 
 // A relief of `depth` (CV_32FC1, z toward the camera) lit from the upper left:

@@ -226,7 +226,9 @@ std::string viewer_section(const SurfaceModel& model, const Inputs& in) {
   return html;
 }
 
-std::string surface_section(const Inputs& in, const io::DecodedNormals& normals, const cv::Mat& albedo) {
+// `albedo`: grey, or colour (BGR) for a colour stack's result; `grey_albedo` sets the scale.
+std::string surface_section(const Inputs& in, const io::DecodedNormals& normals, const cv::Mat& albedo,
+                            const cv::Mat& grey_albedo) {
   std::string html = "<div class=\"row\">\n";
   html +=
       figure(png_data_uri(normal_colours(normals.normals, normals.valid)), "normal map",
@@ -236,10 +238,11 @@ std::string surface_section(const Inputs& in, const io::DecodedNormals& normals,
              "Reference: a sphere's normals in the same code (the light toward the camera is the centre).",
              "legend");
   const double scale = in.summary.value("albedo_png_scale", 0.0);
-  const double shown = scale > 0 ? scale : std::max(quantile(albedo, normals.valid, 0.995), 1e-12);
-  html += figure(
-      png_data_uri(grey(albedo, normals.valid, shown)), "albedo",
-      fmt::format("Albedo, white at {} (99.5th percentile of the solved albedo).", format_number(shown)));
+  const double shown = scale > 0 ? scale : std::max(quantile(grey_albedo, normals.valid, 0.995), 1e-12);
+  html +=
+      figure(png_data_uri(grey(albedo, normals.valid, shown)), "albedo",
+             fmt::format("{}, white at {} (99.5th percentile of the solved albedo).",
+                         albedo.channels() == 3 ? "Colour albedo (linear)" : "Albedo", format_number(shown)));
   html += "</div>\n";
   return html;
 }
@@ -574,7 +577,9 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
 
   const cv::Mat albedo_full =
       folder.albedo.empty() ? cv::Mat(normals.normals.size(), CV_32FC1, cv::Scalar(0)) : folder.albedo;
-  page.section("surface", "Normals and albedo", surface_section(in, normals, albedo_full));
+  page.section("surface", "Normals and albedo",
+               surface_section(in, normals, folder.albedo.empty() ? albedo_full : folder.colour_albedo(),
+                               albedo_full));
 
   // Depth: --depth (a depth.pfm, or a `lightstage integrate` folder), else RESULT_DIR/depth.pfm.
   fs::path depth_file = result_dir / "depth.pfm";

@@ -6,6 +6,7 @@
 #include "report/html.hpp"
 
 #include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <bit>
@@ -69,10 +70,30 @@ SurfaceModel load_surface_model(const io::SolveFolder& folder, int max_pixels,
   model.normals = subsample(relight_model.normals, model.stride);
   model.valid = subsample(relight_model.solved, model.stride);
   model.albedo = subsample(relight_model.albedo, model.stride);
+  model.chroma = subsample(relight_model.chroma, model.stride);
   if (model.kind == ShadingKind::kBiPolynomial)
     model.coefficients = subsample(relight_model.coefficients, model.stride);
   return model;
 }
+
+namespace {
+
+// The model as relight.hpp's, at the viewer's stride (it relights the same way).
+RelightModel as_relight_model(const SurfaceModel& model) {
+  RelightModel m;
+  m.normals = model.normals;
+  m.solved = model.valid;
+  m.albedo = model.albedo;
+  m.chroma = model.chroma;
+  if (model.kind == ShadingKind::kBiPolynomial) {
+    m.coefficients = model.coefficients;
+    m.order = model.order;
+    m.lobe_width = model.lobe_width;
+  }
+  return m;
+}
+
+}  // namespace
 
 double shade(const SurfaceModel& model, int x, int y, const Vec3& light) {
   if (model.valid.at<std::uint8_t>(y, x) == 0) return 0;
@@ -110,6 +131,11 @@ cv::Mat relight(const SurfaceModel& model, const Vec3& light) {
   return out;
 }
 
+cv::Mat relight_colour(const SurfaceModel& model, const Vec3& light) {
+  check_coefficients(model);
+  return lightstage::relight_colour(as_relight_model(model), light);
+}
+
 ViewerPayload encode_viewer_payload(const SurfaceModel& model, const std::vector<Vec3>& capture_lights,
                                     const Vec3& initial_light) {
   check_coefficients(model);
@@ -133,6 +159,13 @@ ViewerPayload encode_viewer_payload(const SurfaceModel& model, const std::vector
     const cv::Mat c = model.coefficients.isContinuous() ? model.coefficients : model.coefficients.clone();
     append("coefficients", "float32", c.channels(), c.data,
            count * sizeof(float) * static_cast<std::size_t>(c.channels()));
+  }
+  cv::Mat chroma_rgb;
+  if (!model.chroma.empty()) {
+    if (model.chroma.type() != CV_32FC3 || model.chroma.size() != model.normals.size())
+      fail("report: the viewer's chroma must be a colour map of the normals' size");
+    cv::cvtColor(model.chroma, chroma_rgb, cv::COLOR_BGR2RGB);
+    append("chroma", "float32", 3, chroma_rgb.data, count * 3 * sizeof(float));
   }
   // Normals re-encoded as normal.png encodes them (round((n+1)/2·65535), x y z order).
   cv::Mat encoded(model.normals.size(), CV_16UC3, cv::Scalar::all(0));
@@ -165,6 +198,7 @@ ViewerPayload encode_viewer_payload(const SurfaceModel& model, const std::vector
                                                                           {"lobe_width", model.lobe_width}}
                                                          : nlohmann::json{{"kind", "lambertian"}}},
       {"display", {{"scale", model.display_scale}, {"gamma", "linear"}}},
+      {"colour", !model.chroma.empty()},
       {"stride", model.stride},
       {"source_size", {model.source_size.width, model.source_size.height}},
       {"lights", lights},

@@ -21,8 +21,9 @@ Mesh mesh_from_depth(const cv::Mat& depth, const cv::Mat& valid, const CameraMod
   if (!normals.empty() && (normals.type() != CV_32FC3 || normals.size() != depth.size()))
     fail("mesh: normals must be CV_32FC3 of the depth's size");
   if (!albedo.empty() &&
-      ((albedo.type() != CV_32FC1 && albedo.type() != CV_8UC3) || albedo.size() != depth.size()))
-    fail("mesh: albedo must be CV_32FC1 or CV_8UC3 of the depth's size");
+      ((albedo.type() != CV_32FC1 && albedo.type() != CV_32FC3 && albedo.type() != CV_8UC3) ||
+       albedo.size() != depth.size()))
+    fail("mesh: albedo must be CV_32FC1, CV_32FC3 or CV_8UC3 of the depth's size");
   const int rows = depth.rows, cols = depth.cols;
   Mesh mesh;
   cv::Mat index(depth.size(), CV_32SC1, cv::Scalar(-1));
@@ -38,10 +39,15 @@ Mesh mesh_from_depth(const cv::Mat& depth, const cv::Mat& valid, const CameraMod
         mesh.normals.emplace_back(n[0], n[1], n[2]);
       }
       if (!albedo.empty()) {
+        const auto byte = [](float v) {
+          return static_cast<std::uint8_t>(std::clamp(v, 0.0f, 1.0f) * 255.0f + 0.5f);
+        };
         if (albedo.type() == CV_32FC1) {
-          const auto v =
-              static_cast<std::uint8_t>(std::clamp(albedo.at<float>(r, c), 0.0f, 1.0f) * 255.0f + 0.5f);
+          const auto v = byte(albedo.at<float>(r, c));
           mesh.colours.push_back({v, v, v});
+        } else if (albedo.type() == CV_32FC3) {
+          const cv::Vec3f bgr = albedo.at<cv::Vec3f>(r, c);
+          mesh.colours.push_back({byte(bgr[2]), byte(bgr[1]), byte(bgr[0])});
         } else {
           const cv::Vec3b bgr = albedo.at<cv::Vec3b>(r, c);
           mesh.colours.push_back({bgr[2], bgr[1], bgr[0]});

@@ -16,6 +16,14 @@
 // pattern of a dark (hot pixels, amplifier glow, column offsets) is so
 // removed where a scalar level would leave it in the signal.
 //
+// Colour: a colour stack also gives each pixel its chromaticity, the share of
+// each linear channel in the grey (chroma_c = value_c / grey, so that the
+// BT.601 grey of the chroma is 1): the per-channel median over the pixel's lit,
+// unsaturated observations (grey at least kChromaMinShare of its brightest).
+// The median follows the diffuse colour and not a white highlight that lights
+// a minority of the frames (the dichromatic rule of dielectrics). Relighting
+// multiplies its grey by it (reflectance/relight.hpp).
+//
 // Saturation is reported beside the values, not folded into them: an
 // observation is saturated when any raw channel is ≥ the frame's saturation
 // level (Frame::saturation_level, or the type maximum when that is 0; float
@@ -33,6 +41,10 @@
 #include <vector>
 
 namespace lightstage {
+
+// Observations darker than this share of a pixel's brightest are left out of
+// its chroma (their ratios are mostly noise).
+inline constexpr double kChromaMinShare = 0.05;
 
 struct RadiometryOptions {
   // Clamp normalised grey values to ≤ 1 (DiLiGenT's ball: 4.10° mean error with, 4.17° without).
@@ -54,7 +66,9 @@ struct Observations {
   std::vector<cv::Point> pixels;  // (x = column, y = row) inside the mask, row-major scan order
   ObservationMatrix intensities;  // pixels × images, linear grey values as above
   FlagMatrix saturated;           // pixels × images, true = raw value at or above saturation
-  Eigen::MatrixX3d lights;        // images × 3, unit light directions (object -> light)
+  // Colour stacks: pixels × 3 (r, g, b) chroma as above; empty for grey stacks.
+  Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor> chroma;
+  Eigen::MatrixX3d lights;  // images × 3, unit light directions (object -> light)
   // Set when LED positions are known: per-pixel directions and falloff
   // (near_light_directions) replace `lights`, which stays the distant approximation.
   std::optional<NearLights> near;
@@ -68,5 +82,10 @@ struct Observations {
 // type, an unsupported pixel type, a dark frame that does not fit its frame,
 // or a mask of the wrong size or type.
 Observations make_observations(const ImageStack& stack, const RadiometryOptions& options = {});
+
+// The chroma of `obs` as an image: CV_32FC3 in OpenCV's (b, g, r) order, 0
+// where `solved` (CV_8UC1, or empty = every observed pixel) is 0 and off the
+// observed pixels. Empty when the observations have no chroma (grey stacks).
+cv::Mat chroma_image(const Observations& obs, const cv::Mat& solved = {});
 
 }  // namespace lightstage

@@ -9,6 +9,9 @@
 //                  ρ(x, y) = Σ_i Σ_j C_ij x^i y^j, C_ij at index i·(k+1) + j
 //                  (+ S · D(n·h) when model.lobe_width m > 0, S the pixel's last
 //                  coefficient, D = exp(−tan²θ_h / m²) / cos⁴θ_h: specularLobe)
+//   colour (a colour stack's result, surface.chroma): per channel c
+//                  max(0, chroma_c · ρ_polynomial + ρ_lobe) · max(0, n·l)
+//                  (Lambertian: chroma_c · albedo · max(0, n·l)); the lobe stays white
 //
 // Display: byte = round(255 · clamp01((exposure · value / scale)^(1/γ))) with
 // γ = 1 (linear, the default, what `lightstage relight` writes) or the sRGB curve.
@@ -59,10 +62,19 @@ export function decodeNormals(encoded, count) {
 }
 
 // Linear radiance of every pixel under the unit light `light` into `out`
-// (Float32Array of width·height; 0 where there is no normal).
-export function renderRadiance(surface, light, out) {
+// (Float32Array of width·height; 0 where there is no normal) and, when
+// `colour` (Float32Array of width·height·3, r g b) is given, in colour.
+export function renderRadiance(surface, light, out, colour = null) {
   const l = normalise(light);
   const { normals, valid, albedo, coefficients, model } = surface;
+  const chroma = surface.chroma ?? null;
+  const setColour = (p, polynomial, lobe, nl) => {
+    if (!colour) return;
+    for (let c = 0; c < 3; ++c) {
+      const k = chroma ? chroma[3 * p + c] : 1;
+      colour[3 * p + c] = Math.max(0, k * polynomial + lobe) * nl;
+    }
+  };
   const count = valid.length;
   const bipolynomial = model.kind === 'bipolynomial' && coefficients;
   const order = bipolynomial ? model.order : 0;
@@ -72,26 +84,23 @@ export function renderRadiance(surface, light, out) {
   const h = normalise([l[0], l[1], l[2] + 1]);
   const lh = l[0] * h[0] + l[1] * h[1] + l[2] * h[2];
   for (let p = 0; p < count; ++p) {
-    if (!valid[p]) {
-      out[p] = 0;
-      continue;
-    }
     const nx = normals[3 * p], ny = normals[3 * p + 1], nz = normals[3 * p + 2];
     const nl = nx * l[0] + ny * l[1] + nz * l[2];
-    if (!(nl > 0)) {
+    if (!valid[p] || !(nl > 0)) {
       out[p] = 0;
+      setColour(p, 0, 0, 0);
       continue;
     }
-    let rho;
+    let polynomial, specular = 0;
     if (bipolynomial) {
       const nh = nx * h[0] + ny * h[1] + nz * h[2];
-      rho = evaluateBiPolynomial(order, coefficients, p * terms, nh, lh);
-      if (lobe > 0) rho += coefficients[p * terms + polynomialTerms] * specularLobe(nh, lobe);
-      rho = Math.max(0, rho);  // ρ clamped to ≥ 0
+      polynomial = evaluateBiPolynomial(order, coefficients, p * terms, nh, lh);
+      if (lobe > 0) specular = coefficients[p * terms + polynomialTerms] * specularLobe(nh, lobe);
     } else {
-      rho = albedo[p];
+      polynomial = albedo[p];
     }
-    out[p] = rho * nl;
+    out[p] = Math.max(0, polynomial + specular) * nl;  // ρ clamped to ≥ 0
+    setColour(p, polynomial, specular, nl);
   }
   return out;
 }
@@ -100,19 +109,19 @@ function srgbEncode(v) {
   return v <= 0.0031308 ? 12.92 * v : 1.055 * Math.pow(v, 1 / 2.4) - 0.055;
 }
 
-// Radiance to RGBA bytes (grey) for a canvas ImageData. Pixels without a
-// normal get alpha 0.
-export function toDisplay(radiance, valid, display, rgba) {
+// Radiance to RGBA bytes for a canvas ImageData: grey, or the colour radiance
+// (r g b per pixel) when given. Pixels without a normal get alpha 0.
+export function toDisplay(radiance, valid, display, rgba, colour = null) {
   const factor = (display.exposure ?? 1) / (display.scale > 0 ? display.scale : 1);
   const srgb = display.gamma === 'srgb';
-  for (let p = 0; p < radiance.length; ++p) {
-    let v = radiance[p] * factor;
+  const toByte = (value) => {
+    let v = value * factor;
     v = v > 1 ? 1 : v > 0 ? v : 0;
     if (srgb) v = srgbEncode(v);
-    const byte = Math.round(v * 255);
-    rgba[4 * p] = byte;
-    rgba[4 * p + 1] = byte;
-    rgba[4 * p + 2] = byte;
+    return Math.round(v * 255);
+  };
+  for (let p = 0; p < radiance.length; ++p) {
+    for (let c = 0; c < 3; ++c) rgba[4 * p + c] = toByte(colour ? colour[3 * p + c] : radiance[p]);
     rgba[4 * p + 3] = valid[p] ? 255 : 0;
   }
   return rgba;

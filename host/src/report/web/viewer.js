@@ -8,7 +8,7 @@
 // #viewer-srgb, #viewer-readout, #viewer-status.
 //
 // Test hook: window.lightstageViewer = { ready, setLight(x, y, z), getLight(),
-// getImageData(), getRadiance(), meta, renders }.
+// getImageData(), getRadiance(), getColourRadiance() (null for grey), meta, renders }.
 import { azimuthElevationDeg, decodeNormals, normalise, renderRadiance, toDisplay } from './shading.js';
 import { HemisphereWidget } from './hemisphere.js';
 
@@ -55,7 +55,9 @@ async function loadSurface(meta, dataText) {
     const given = meta.planes.find((p) => p.name === 'coefficients').components;
     if (given !== terms) throw new Error(`viewer data: ${given} coefficients per pixel, the model has ${terms}`);
   }
-  return { normals, valid, albedo, coefficients, model: meta.model };
+  const chroma = meta.colour ? plane(meta, buffer, 'chroma') : null;
+  if (meta.colour && !chroma) throw new Error('viewer data: a colour result without its chroma plane');
+  return { normals, valid, albedo, coefficients, chroma, model: meta.model };
 }
 
 function byId(id) {
@@ -73,6 +75,7 @@ async function start() {
   const context = canvas.getContext('2d', { willReadFrequently: true });
   const image = context.createImageData(meta.width, meta.height);
   const radiance = new Float32Array(meta.width * meta.height);
+  const colour = surface.chroma ? new Float32Array(meta.width * meta.height * 3) : null;
   const display = { scale: meta.display.scale, exposure: 1, gamma: meta.display.gamma || 'linear' };
   const exposure = byId('viewer-exposure');
   const srgb = byId('viewer-srgb');
@@ -81,8 +84,8 @@ async function start() {
   let light = normalise(meta.light || [0, 0, 1]);
 
   const render = () => {
-    renderRadiance(surface, light, radiance);
-    toDisplay(radiance, surface.valid, display, image.data);
+    renderRadiance(surface, light, radiance, colour);
+    toDisplay(radiance, surface.valid, display, image.data, colour);
     context.putImageData(image, 0, 0);
     const { azimuth, elevation } = azimuthElevationDeg(light);
     readout.textContent = `l = (${light.map((v) => v.toFixed(3)).join(', ')}), ` +
@@ -108,6 +111,7 @@ async function start() {
   hook.getLight = () => light.slice();
   hook.getImageData = () => context.getImageData(0, 0, meta.width, meta.height);
   hook.getRadiance = () => radiance.slice();
+  hook.getColourRadiance = () => (colour ? colour.slice() : null);
   widget.set(light);
 }
 

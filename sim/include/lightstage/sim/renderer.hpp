@@ -13,6 +13,12 @@
 // pixels), so even a highlight smaller than a pixel has an intensity
 // centroid accurate to a small fraction of a pixel. Diffuse shading is not
 // blurred (it stays exact for tests and solvers).
+//
+// A scene whose material has a colour renders the diffuse and the specular
+// parts apart (render_parts); colour channel c is then
+//     diffuse · tint_c(x) + specular
+// (render_colour), so highlights and mirrors stay white. render() is the grey
+// rendering either way (the tint's BT.601 grey is 1), at the grey cost.
 
 #include "lightstage/common/image_stack.hpp"
 #include "lightstage/sim/scene.hpp"
@@ -37,11 +43,25 @@ class Renderer {
 
   // CV_64FC1 shading image lit by `lights` (see the formula above).
   cv::Mat render(const std::vector<LightSource>& lights) const;
+  // The same split in two CV_64FC1 images: *diffuse, the kd · albedo ·
+  // diffuse lobe part (the part a colour tints), and *specular, the rest
+  // (specular lobes, mirror highlights, the reflected environment). Their sum
+  // is render(lights) up to rounding.
+  void render_parts(const std::vector<LightSource>& lights, cv::Mat* diffuse, cv::Mat* specular) const;
+  // CV_64FC3 shading in OpenCV's BGR order: diffuse · tint + specular per
+  // channel. A scene without a colour gives three equal channels.
+  cv::Mat render_colour(const std::vector<LightSource>& lights) const;
+  // True when the scene's material has a colour (World::frame then makes CV_16UC3 frames).
+  bool has_colour() const { return !tint_.empty(); }
 
   const cv::Mat& mask() const { return mask_; }
   const GroundTruth& ground_truth() const { return truth_; }
   // Diffuse albedo of the surface seen at each pixel (CV_32FC1, 0 off the object).
   cv::Mat albedo_map() const;
+  // The colour tint of the surface seen at each pixel (CV_32FC3, BGR order,
+  // BT.601 grey 1 on the object, 0 off it); (1, 1, 1) on the object when the
+  // scene has no colour.
+  cv::Mat tint_map() const;
   const Camera& camera() const { return camera_; }
 
   // Light direction and irradiance factor at object-frame point x for an LED at
@@ -62,6 +82,8 @@ class Renderer {
   };
   Splat mirror_coverage(int row, int col, const Pixel& px, const Vec3& led) const;
   void add_mirror(const Vec3& led, double scale, cv::Mat& out) const;
+  // Renders into *out; with `specular` set, the non-diffuse part goes there instead.
+  void shade(const std::vector<LightSource>& lights, cv::Mat* out, cv::Mat* specular) const;
   std::optional<Hit> trace(double u, double v, Vec3* view) const;
   // Fraction of each pixel the object covers (8×8 samples where the
   // silhouette crosses the pixel), for Scene::environment_radiance.
@@ -75,6 +97,7 @@ class Renderer {
   std::vector<Pixel> pixels_;
   cv::Mat mask_;
   cv::Mat coverage_;  // CV_64FC1, only when a mirror reflects an environment
+  cv::Mat tint_;      // CV_64FC3 (BGR), only when the material has a colour
   GroundTruth truth_;
 };
 

@@ -14,6 +14,13 @@ namespace lightstage::sim {
 Scene parse_scene(const std::string& yaml_text, const std::string& source);
 Scene load_scene(const std::filesystem::path& path);
 
+// A colour spec, the value of a scene's `colour` key as YAML text
+// (docs/scene-format.md): "0.9,0.6,0.3", "[0.9, 0.6, 0.3]", "patches",
+// "checker", "{type: patches, period_mm: 16, saturation: 0.6, seed: 3}",
+// "{type: checker, values: [[0.9, 0.3, 0.3], [0.3, 0.3, 0.9]], period_mm: 10}".
+// Throws InputError naming the spec, the key and the value.
+ColourTexture parse_colour(const std::string& spec);
+
 // The preset names ("sphere", "chrome-sphere", ...), for --help.
 std::vector<std::string> scene_presets();
 // The YAML text of a preset; throws InputError for an unknown name.

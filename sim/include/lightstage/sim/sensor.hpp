@@ -72,7 +72,11 @@ class Sensor {
  public:
   Sensor(const SensorOptions& options, const CameraDefaults& rig_camera);
 
-  // Shading image (CV_64FC1 or CV_32FC1) → CV_16UC1 frame.
+  // Shading image (CV_64F or CV_32F) → frame: one channel → CV_16UC1; three
+  // (BGR) → CV_16UC3, each channel through the same chain (saturation, black
+  // level, response) with its own noise: channel c (0 = R, 1 = G, 2 = B) draws
+  // from frame_seed(frame_seed(seed, frame_index), c + 1), a single channel
+  // from frame_seed(seed, frame_index).
   cv::Mat expose(const cv::Mat& shading, std::uint64_t seed, std::uint64_t frame_index) const;
 
   double exposure_us() const { return exposure_us_; }
@@ -86,6 +90,8 @@ class Sensor {
   nlohmann::json describe() const;
 
  private:
+  cv::Mat expose_plane(const cv::Mat& shading, std::uint64_t rng_seed) const;  // → CV_16UC1
+
   SensorOptions options_;
   double exposure_us_, gain_, exposure_ratio_, gain_ratio_;
   int bits_;

@@ -10,6 +10,15 @@
 // the object centre. light_intensity (all three channels equal) is
 //     relative_intensity · full_scale_fraction · (exposure/rig exposure)
 //       · (gain/rig gain) · saturation_level / 65535.
+//
+// A scene with a colour (its `colour` key or SimulateOptions::colour) gives
+// CV_16UC3 frames (BGR in memory) where channel c carries
+//     kd · albedo · tint_c · diffuse · max(n·l, 0) + ks · specular · max(n·l, 0)
+// (material.hpp: the highlight stays white); the tint's BT.601 grey is 1, so
+// the BT.601 grey of a frame is the grey frame of the scene without colour.
+// Without a colour frames are CV_16UC1, as they always were. World::render
+// (the simulated camera's source) is grey either way: the virtual camera is
+// monochrome and sees that BT.601 grey.
 
 #include "lightstage/common/image_stack.hpp"
 #include "lightstage/common/rig.hpp"
@@ -31,6 +40,10 @@ namespace lightstage::sim {
 struct SimulateOptions {
   std::string scene = "sphere";  // preset name or path to a scene YAML file
   std::string material;          // material preset string; empty = the scene's own
+  // Colour of the diffuse albedo (parse_colour, scene_file.hpp: "0.9,0.6,0.3",
+  // "patches", "{type: patches, saturation: 0.6}", ...); empty = the scene's own
+  // (none: grey frames).
+  std::string colour;
   LightModel light_model = LightModel::kNear;
   std::optional<int> width, height;  // override the rig camera's (keeping its field of view)
   SensorOptions sensor;
@@ -51,8 +64,12 @@ class World {
   // Shading (CV_64FC1) with the given rig LEDs on; weight = fraction of the
   // exposure each was on (multiplied by its relative_intensity).
   cv::Mat render(const std::vector<std::pair<std::size_t, double>>& leds_on) const;
-  // The frame for rig LED `index` alone, exposed with noise drawn from (seed, index).
+  // The frame for rig LED `index` alone, exposed with noise drawn from (seed,
+  // index): CV_16UC3 (BGR) when the scene has a colour, else CV_16UC1.
   Frame frame(std::size_t index) const;
+  bool has_colour() const { return renderer_.has_colour(); }
+  // Per-pixel tint (CV_32FC3, BGR, 0 off the object): Renderer::tint_map.
+  cv::Mat tint_map() const { return renderer_.tint_map(); }
 
   const Scene& scene() const { return scene_; }
   const Sensor& sensor() const { return sensor_; }
@@ -61,6 +78,8 @@ class World {
   nlohmann::json describe() const;
 
  private:
+  std::vector<LightSource> light_sources(const std::vector<std::pair<std::size_t, double>>& leds_on) const;
+
   Rig rig_;
   SimulateOptions options_;
   Scene scene_;

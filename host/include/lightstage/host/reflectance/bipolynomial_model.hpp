@@ -49,6 +49,15 @@ int relighting_term_count(int order, double lobe_width);
 double evaluate_relighting_brdf(int order, double lobe_roughness, const float* coefficients, double n_dot_h,
                                 double l_dot_h);
 
+// The two parts of that ρ before the clamp: the bi-polynomial, which takes a
+// colour stack's chroma, and the lobe, which stays white (dichromatic rule).
+struct RelightingBrdfParts {
+  double polynomial = 0;
+  double lobe = 0;
+};
+RelightingBrdfParts evaluate_relighting_parts(int order, double lobe_roughness, const float* coefficients,
+                                              double n_dot_h, double l_dot_h);
+
 // "C00", "C01", ... in storage order.
 std::vector<std::string> bipolynomial_term_names(int order);
 

@@ -4,7 +4,11 @@
 // for methods without one, the Lambertian albedo. A rendered value is
 //   ρ(n·h, l·h) · max(n·l, 0)    (ρ clamped to ≥ 0; plus the specular lobe
 //                                 when the solve fitted one)
-// in the stack's units (linear, at unit light intensity).
+// in the stack's units (linear, at unit light intensity). A colour result
+// (io::SolveFolder::chroma) relights in colour: per channel c
+//   max(0, chroma_c · ρ_polynomial + ρ_lobe) · max(n·l, 0)
+// (the Lambertian fallback: chroma_c · albedo · max(n·l, 0)), whose BT.601
+// grey is the grey value above wherever it is not clamped.
 
 #include "lightstage/common/geometry.hpp"
 #include "lightstage/host/io/solve_output.hpp"
@@ -23,6 +27,7 @@ struct RelightModel {
   cv::Mat coefficients;   // CV_32FC(k), CV_32FC(k + 1) with the lobe, or empty
   int order = 0;          // bi-polynomial order, 0 = Lambertian albedo
   double lobe_width = 0;  // > 0: the last coefficient weighs a specular lobe (bipolynomial_model.hpp)
+  cv::Mat chroma;         // CV_32FC3 (b, g, r) of a colour result, else empty
 };
 
 // The model of a solve folder (io/solve_output.hpp): its normals, albedo (1
@@ -33,6 +38,9 @@ RelightModel load_relight_model(const std::filesystem::path& result_dir);
 
 // CV_32FC1 image under one distant light `light` (object -> light, normalised here).
 cv::Mat relight(const RelightModel& model, const Vec3& light, const Vec3& view = Vec3::UnitZ());
+// CV_32FC3 (BGR) image in colour as above; the grey in all three channels when
+// the model has no chroma.
+cv::Mat relight_colour(const RelightModel& model, const Vec3& light, const Vec3& view = Vec3::UnitZ());
 
 // `count` lights on a ring at `elevation_deg` above the image plane, for a
 // turntable-of-light animation.

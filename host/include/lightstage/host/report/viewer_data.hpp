@@ -11,7 +11,8 @@
 // — the definition of `lightstage relight` (reflectance/relight.hpp), whose
 // loader reads the files here too.
 //
-// The page shows value / display_scale as a linear grey (0 → black, ≥ 1 → white).
+// The page shows value / display_scale as a linear grey (0 → black, ≥ 1 → white);
+// a colour result (SurfaceModel::chroma) in colour as relight_colour renders it.
 
 #include "lightstage/common/geometry.hpp"
 #include "lightstage/host/io/solve_output.hpp"
@@ -31,6 +32,7 @@ struct SurfaceModel {
   cv::Mat normals;       // CV_32FC3 (x, y, z), unit where valid: decoded from normal.png
   cv::Mat valid;         // CV_8UC1, 255 where normal.png holds a normal
   cv::Mat albedo;        // CV_32FC1: albedo.pfm (1 when there is none, as relight does)
+  cv::Mat chroma;        // CV_32FC3 (b, g, r) of a colour result, else empty (relight.hpp)
   cv::Mat coefficients;  // CV_32FC(terms) for kBiPolynomial (summary.json files.brdf), C_ij at i·(k+1)+j
   ShadingKind kind = ShadingKind::kLambertian;
   int order = 0;               // bi-polynomial order k (1..3); 0 for Lambertian
@@ -53,11 +55,14 @@ double shade(const SurfaceModel& model, int x, int y, const Vec3& light);
 
 // Every pixel: CV_32FC1, 0 where not valid.
 cv::Mat relight(const SurfaceModel& model, const Vec3& light);
+// Every pixel in colour: CV_32FC3 (BGR), 0 where not valid; lightstage::relight_colour.
+cv::Mat relight_colour(const SurfaceModel& model, const Vec3& light);
 
 // The page's embedded data (viewer.js reads it): `meta` (width, height,
 // encoding, planes, model, display, lights, light) and the base64 of the
-// zlib-deflated planes (little-endian float32 albedo and coefficients, then
-// uint16 normals in the normal.png encoding).
+// zlib-deflated planes (little-endian float32 albedo, coefficients and, for
+// a colour result, chroma in r g b order; then uint16 normals in the
+// normal.png encoding).
 struct ViewerPayload {
   nlohmann::json meta;
   std::string data_base64;

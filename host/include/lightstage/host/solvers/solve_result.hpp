@@ -65,8 +65,11 @@ struct SolveResult {
   cv::Mat residual;  // CV_32FC1, RMS of the fit over the observations used, zero where not solved
   cv::Mat solved;    // CV_8UC1, 255 where solved
   // Optional per-pixel outputs (empty when a method does not produce them):
-  cv::Mat confidence;    // CV_32FC1 in [0, 1] from the predicted error (normal_confidence.hpp; solve_with)
-  cv::Mat coefficients;  // CV_32FC(k), a per-pixel reflectance model (see `reflectance`)
+  cv::Mat confidence;  // CV_32FC1 in [0, 1] from the predicted error (normal_confidence.hpp; solve_with)
+  // Colour stacks: CV_32FC3 (b, g, r, OpenCV's order) chroma of radiometry.hpp,
+  // the colour albedo being albedo · chroma; 0 where not solved (solve_with).
+  cv::Mat chroma;
+  cv::Mat coefficients;                  // CV_32FC(k), a per-pixel reflectance model (see `reflectance`)
   nlohmann::json reflectance = nullptr;  // describes `coefficients` (model, order, term order)
   // Methods that choose per pixel (auto): CV_8UC1, 0 where not solved, k where
   // the pixel took choices[k - 1]. Written as method_map.png with counts.

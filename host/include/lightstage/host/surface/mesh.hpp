@@ -28,8 +28,8 @@ struct Mesh {
 // triangles (three valid pixels give one), skipping blocks whose depth jumps
 // by more than `max_edge_ratio` times the pixel footprint (occluding edges).
 // `normals` (CV_32FC3 x y z, optional) become vertex normals, else normals
-// are computed from the triangles; `albedo` (CV_32FC1 in [0, 1] or CV_8UC3
-// BGR, optional) becomes the colour.
+// are computed from the triangles; `albedo` (CV_32FC1 or CV_32FC3 BGR in
+// [0, 1], or CV_8UC3 BGR; optional) becomes the colour.
 struct MeshOptions {
   double max_edge_ratio = 20;
   void check() const;
