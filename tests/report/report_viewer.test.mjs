@@ -304,6 +304,16 @@ test('the ball relit in colour at a held-out light looks like its photograph', a
   const rmse = Math.sqrt(squared / reference);
   console.log(`ball, light ${held + 1} held out: viewer vs photo relative RMSE ${rmse.toFixed(4)} (colour)`);
   assert.ok(rmse < 0.25, `relative RMSE ${rmse}`);
+  // The canvas is in colour, and grey with the grey box.
+  const spread = async () => page.evaluate(() => {
+    const d = window.lightstageViewer.getImageData().data;
+    let most = 0;
+    for (let p = 0; p < d.length; p += 4) most = Math.max(most, Math.abs(d[p] - d[p + 2]));
+    return most;
+  });
+  assert.ok(await spread() > 20, 'the ball shows its colour (red and blue differ)');
+  await page.locator('#viewer-grey').check();
+  assert.equal(await spread(), 0, 'grey: red = blue everywhere');
 
   // Viewer and photograph side by side, each value / the albedo picture's white.
   const scale = shown.meta.display.scale;

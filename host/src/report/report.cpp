@@ -205,6 +205,10 @@ std::string viewer_section(const SurfaceModel& model, const Inputs& in) {
                             ? fmt::format(", ρ with a specular lobe of width {:.2f}", model.lobe_width)
                             : std::string())
           : std::string("Lambertian: albedo · max(0, n·l)");
+  if (!model.chroma.empty()) model_text += ", in the albedo's colour (a specular lobe stays white)";
+  // Colour results can be shown grey too, as `relight --grey` writes them.
+  const std::string grey_box =
+      model.chroma.empty() ? std::string() : "<label><input id=\"viewer-grey\" type=\"checkbox\"> grey</label>\n";
   std::string html = fmt::format(
       "<p>Drag on the hemisphere (mouse, pen or finger) to move a distant light; or focus it and use the "
       "arrow keys "
@@ -216,9 +220,10 @@ std::string viewer_section(const SurfaceModel& model, const Inputs& in) {
       "<span id=\"viewer-readout\"></span>\n"
       "<label>exposure <input id=\"viewer-exposure\" type=\"range\" min=\"-3\" max=\"3\" step=\"0.1\" "
       "value=\"0\"> "
-      "(stops)</label>\n<label><input id=\"viewer-srgb\" type=\"checkbox\"> sRGB tone curve</label>\n"
+      "(stops)</label>\n<label><input id=\"viewer-srgb\" type=\"checkbox\"> sRGB tone curve</label>\n{}"
       "<span id=\"viewer-status\"></span>\n</div>\n</div>\n",
-      escape_html(model_text), format_number(model.display_scale), model.normals.cols, model.normals.rows);
+      escape_html(model_text), format_number(model.display_scale), model.normals.cols, model.normals.rows,
+      grey_box);
   html += "<script type=\"application/json\" id=\"lightstage-viewer-meta\">" + payload.meta.dump() +
           "</script>\n";
   html += "<script type=\"application/octet-stream\" id=\"lightstage-viewer-data\">" + payload.data_base64 +

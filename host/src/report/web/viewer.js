@@ -5,7 +5,7 @@
 //   <script type="application/octet-stream" id="lightstage-viewer-data">  base64
 //       of the planes (zlib-deflated when meta.encoding is "deflate")
 // and the elements #viewer-canvas, #viewer-hemisphere, #viewer-exposure,
-// #viewer-srgb, #viewer-readout, #viewer-status.
+// #viewer-srgb, #viewer-readout, #viewer-status (and #viewer-grey for a colour result).
 //
 // Test hook: window.lightstageViewer = { ready, setLight(x, y, z), getLight(),
 // getImageData(), getRadiance(), getColourRadiance() (null for grey), meta, renders }.
@@ -85,7 +85,7 @@ async function start() {
 
   const render = () => {
     renderRadiance(surface, light, radiance, colour);
-    toDisplay(radiance, surface.valid, display, image.data, colour);
+    toDisplay(radiance, surface.valid, display, image.data, display.grey ? null : colour);
     context.putImageData(image, 0, 0);
     const { azimuth, elevation } = azimuthElevationDeg(light);
     readout.textContent = `l = (${light.map((v) => v.toFixed(3)).join(', ')}), ` +
@@ -100,6 +100,13 @@ async function start() {
     display.exposure = Math.pow(2, Number(exposure.value));
     render();
   });
+  const grey = document.getElementById('viewer-grey');
+  if (grey) {
+    grey.addEventListener('change', () => {
+      display.grey = grey.checked;
+      render();
+    });
+  }
   srgb.checked = display.gamma === 'srgb';
   srgb.addEventListener('change', () => {
     display.gamma = srgb.checked ? 'srgb' : 'linear';
