@@ -74,8 +74,9 @@ void add_relight(CLI::App& app) {
   sub->add_flag("--json", args->json, "--holdout: print the result as one JSON object");
   sub->callback([args] {
     if (args->holdout) {
-      if (!args->out.empty() || !args->lights.empty() || args->turntable != 0)
-        fail("--holdout: measures on a stack and writes nothing; drop --out, --light and --turntable");
+      if (!args->out.empty() || !args->lights.empty() || args->turntable != 0 || args->grey)
+        fail(
+            "--holdout: measures on a stack and writes nothing; drop --out, --light, --turntable and --grey");
       args->holdout_settings.input = args->input;
       const nlohmann::json r = pipeline::rti_holdout(args->holdout_settings);
       if (args->json)

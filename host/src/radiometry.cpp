@@ -249,6 +249,9 @@ cv::Mat chroma_image(const Observations& obs, const cv::Mat& solved) {
   if (obs.chroma.rows() == 0) return {};
   if (obs.chroma.rows() != static_cast<Eigen::Index>(obs.pixels.size()))
     fail("radiometry: {} chroma rows for {} pixels", obs.chroma.rows(), obs.pixels.size());
+  if (!solved.empty() && (solved.type() != CV_8UC1 || solved.size() != obs.size))
+    fail("radiometry: the solved map is type {} of {}x{}, the observations {}x{}", solved.type(), solved.cols,
+         solved.rows, obs.size.width, obs.size.height);
   cv::Mat out(obs.size, CV_32FC3, cv::Scalar::all(0));
   for (std::size_t p = 0; p < obs.pixels.size(); ++p) {
     const cv::Point at = obs.pixels[p];

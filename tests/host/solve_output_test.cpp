@@ -131,16 +131,29 @@ TEST(HostSolveFolder, AColourResultKeepsItsChromaThroughTheFiles) {
   const float a = result.albedo.at<float>(4, 7);
   EXPECT_FLOAT_EQ(colour.at<cv::Vec3f>(4, 7)[2], 1.6f * a);  // R
   EXPECT_EQ(io::read_image(dir / "albedo_rgb.png").type(), CV_16UC3);
-  const cv::Mat exr = io::read_exr(dir / "albedo.exr", {"R", "Y"});
-  EXPECT_FLOAT_EQ(exr.at<cv::Vec2f>(4, 7)[0], 1.6f * a);
-  EXPECT_FLOAT_EQ(exr.at<cv::Vec2f>(4, 7)[1], a);
+  EXPECT_FLOAT_EQ(io::read_exr(dir / "albedo_rgb.exr", {"R"}).at<float>(4, 7), 1.6f * a);
+  EXPECT_FLOAT_EQ(io::read_exr(dir / "albedo.exr", {"Y"}).at<float>(4, 7), a);
+  // The colour picture's white is the 99.5th percentile of every channel's values.
+  const double colour_scale = written["albedo_rgb_png_scale"];
+  std::size_t above = 0, total = 0;
+  for (int y = 0; y < colour.rows; ++y)
+    for (int x = 0; x < colour.cols; ++x)
+      for (int c = 0; c < 3; ++c, ++total) above += colour.at<cv::Vec3f>(y, x)[c] > colour_scale ? 1 : 0;
+  EXPECT_LE(above, total / 200 + 1);
+  EXPECT_GT(colour_scale, written["albedo_png_scale"].get<double>());  // the red channel sets it
 
   const io::SolveFolder folder = io::read_solve_folder(dir);
   ASSERT_EQ(folder.chroma.type(), CV_32FC3);
   EXPECT_LT(cv::norm(folder.chroma, result.chroma, cv::NORM_INF), 1e-6);
   const cv::Mat shown = folder.display_albedo();
   ASSERT_EQ(shown.type(), CV_32FC3);
-  EXPECT_NEAR(shown.at<cv::Vec3f>(4, 7)[0], std::min(1.0, 0.5 * a / folder.albedo_png_scale), 1e-6);
+  EXPECT_NEAR(shown.at<cv::Vec3f>(4, 7)[0], std::min(1.0, 0.5 * a / colour_scale), 1e-6);
+
+  // Solved again from a grey stack into the same folder: the old colour files stay but are not read.
+  result.chroma.release();
+  io::write_solve_outputs(dir, result, "/some/input");
+  EXPECT_TRUE(std::filesystem::exists(dir / "albedo_rgb.pfm"));
+  EXPECT_TRUE(io::read_solve_folder(dir).chroma.empty());
 }
 
 TEST(HostSolveFolder, AlbedoFallsBackToThePngTimesItsScale) {

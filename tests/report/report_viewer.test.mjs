@@ -4,7 +4,7 @@
 // that every image loaded, nothing was logged as an error, no request left the
 // page, the keyboard moves the light, and that after a scripted pointer drag on
 // the hemisphere the canvas matches `lightstage relight` for the same light
-// (mean difference < 1%); the same for a bi-polynomial (glossy) solve.
+// (mean difference < 1%); the same for a bi-polynomial (glossy, colour) solve.
 // Screenshots: SCRATCH/screenshot.png and viewer.png (SCRATCH/glossy/ for the second).
 //
 // Environment (set by tests/report/CMakeLists.txt):
@@ -205,14 +205,16 @@ test('the report of a Lambertian solve opens offline, relights on drag and agree
   assert.equal(meta.model.kind, 'lambertian');
 });
 
-test('the report of a bi-polynomial solve relights with the fitted model', async (t) => {
+// In colour (random-hue patches): the canvas is compared channel by channel
+// with `lightstage relight`'s RGB image, the lobe white in both.
+test('the report of a bi-polynomial colour solve relights with the fitted model', async (t) => {
   const dir = path.join(scratch, 'glossy');
   fs.rmSync(dir, { recursive: true, force: true });
   fs.mkdirSync(dir, { recursive: true });
   const stack = path.join(dir, 'stack');
   const result = path.join(dir, 'result');
-  lightstage(['simulate', '--scene', 'bumps', '--material', 'cook-torrance:roughness=0.3,ks=0.5', '--lights',
-    'distant', '--width', '96', '--height', '96', '--out', stack]);
+  lightstage(['simulate', '--scene', 'bumps', '--material', 'cook-torrance:roughness=0.3,ks=0.5', '--colour',
+    'patches', '--lights', 'distant', '--width', '96', '--height', '96', '--out', stack]);
   lightstage(['solve', '--input', stack, '--method', 'biquadratic', '--out', result]);
   const context = await launch(t);
   const meta = await checkReport(context, path.join(result, 'report.html'), result, dir);
@@ -221,6 +223,7 @@ test('the report of a bi-polynomial solve relights with the fitted model', async
   const lobe = summary.reflectance.specular;
   assert.ok(lobe && lobe.width > 0, `no specular lobe: ${JSON.stringify(summary.reflectance.fit)}`);
   assert.deepEqual(meta.model, { kind: 'bipolynomial', order: 2, lobe_width: lobe.width });
+  assert.equal(meta.colour, true);
 });
 
 // The README links the demo's report: the real pipeline (three processes,

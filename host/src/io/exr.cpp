@@ -215,12 +215,9 @@ cv::Mat read_exr(const std::filesystem::path& path, const std::vector<std::strin
 void write_exr(const std::filesystem::path& path, const cv::Mat& image,
                const std::vector<std::string>& channels) {
   const std::string file = path.string();
-  if (image.empty() || image.depth() != CV_32F ||
-      (image.channels() != 1 && image.channels() != 3 && image.channels() != 4))
-    fail(
-        "{}: cannot write as EXR: expected CV_32FC1, CV_32FC3 or CV_32FC4, got depth code {} with {} "
-        "channel(s)",
-        file, image.depth(), image.channels());
+  if (image.empty() || image.depth() != CV_32F || (image.channels() != 1 && image.channels() != 3))
+    fail("{}: cannot write as EXR: expected CV_32FC1 or CV_32FC3, got depth code {} with {} channel(s)", file,
+         image.depth(), image.channels());
   const auto n = static_cast<std::size_t>(image.channels());
   if (channels.size() != n)
     fail("{}: cannot write as EXR: {} channel name(s) for {} channel(s)", file, channels.size(), n);

@@ -78,13 +78,28 @@ void write_method_map(const std::filesystem::path& path, const SolveResult& resu
 }
 
 // albedo · chroma (CV_32FC3, BGR) for a colour result, else empty.
-cv::Mat colour_albedo(const SolveResult& result) {
+cv::Mat colour_albedo(const std::filesystem::path& dir, const SolveResult& result) {
   if (result.chroma.empty()) return {};
   if (result.chroma.type() != CV_32FC3 || result.chroma.size() != result.albedo.size())
-    fail("solve outputs: the chroma must be CV_32FC3 of the albedo's size");
+    fail("{}: cannot write solver outputs: the chroma must be CV_32FC3 of the albedo's size", dir.string());
   cv::Mat albedo3;
   cv::merge(std::vector<cv::Mat>{result.albedo, result.albedo, result.albedo}, albedo3);
   return albedo3.mul(result.chroma);
+}
+
+// White of albedo_rgb.png: the 99.5th percentile of every channel over the
+// solved pixels, so that saturated colours keep their hue (1 when none).
+double colour_png_scale(const cv::Mat& colour, const cv::Mat& solved) {
+  std::vector<float> values;
+  for (int y = 0; y < colour.rows; ++y)
+    for (int x = 0; x < colour.cols; ++x)
+      if (solved.at<std::uint8_t>(y, x) != 0)
+        for (int c = 0; c < 3; ++c) values.push_back(colour.at<cv::Vec3f>(y, x)[c]);
+  if (values.empty()) return 1.0;
+  const auto index = static_cast<std::size_t>(std::floor(0.995 * static_cast<double>(values.size() - 1)));
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(index), values.end());
+  const double scale = values[index];
+  return std::isfinite(scale) && scale > 0 ? scale : 1.0;
 }
 
 }  // namespace
@@ -115,24 +130,18 @@ nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const Solve
   write_pfm(dir / "albedo.pfm", result.albedo);
   write_pfm(dir / "residual.pfm", result.residual);
   write_exr(dir / "normal.exr", result.normals, {"R", "G", "B"});  // R = x, as in normal.png
-  const cv::Mat colour = colour_albedo(result);
-  if (colour.empty()) {
-    write_exr(dir / "albedo.exr", result.albedo, {"Y"});
-  } else {
+  write_exr(dir / "albedo.exr", result.albedo, {"Y"});
+  const cv::Mat colour = colour_albedo(dir, result);
+  const double colour_scale = colour.empty() ? scale : colour_png_scale(colour, result.solved);
+  if (!colour.empty()) {
     write_pfm(dir / "albedo_rgb.pfm", colour);
+    write_exr(dir / "albedo_rgb.exr", colour, {"B", "G", "R"});
     cv::Mat colour16;
-    cv::Mat shown = colour / scale;
+    cv::Mat shown = colour / colour_scale;
     cv::min(shown, 1.0, shown);
     cv::max(shown, 0.0, shown);
     shown.convertTo(colour16, CV_16UC3, 65535.0);
     write_png16(dir / "albedo_rgb.png", colour16);
-    // EXR viewers show R G B; Y stays the grey albedo the solvers fitted.
-    std::vector<cv::Mat> planes;
-    cv::split(colour, planes);
-    planes.push_back(result.albedo);
-    cv::Mat bgry;
-    cv::merge(planes, bgry);
-    write_exr(dir / "albedo.exr", bgry, {"B", "G", "R", "Y"});
   }
 
   nlohmann::json summary = result.summary.to_json();
@@ -148,8 +157,10 @@ nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const Solve
                       {"residual", "residual.pfm"}, {"normals_exr", "normal.exr"},
                       {"albedo_exr", "albedo.exr"}};
   if (!colour.empty()) {
+    summary["albedo_rgb_png_scale"] = colour_scale;
     summary["files"]["albedo_colour"] = "albedo_rgb.png";
     summary["files"]["albedo_colour_float"] = "albedo_rgb.pfm";
+    summary["files"]["albedo_colour_exr"] = "albedo_rgb.exr";
   }
   // Optional per-pixel outputs: confidence and a per-pixel reflectance model (one PFM per coefficient).
   if (!result.confidence.empty()) {
@@ -245,7 +256,10 @@ void read_reflectance(SolveFolder& folder) {
 
 // albedo_rgb.pfm over the grey albedo: the chroma (neutral where the albedo is 0).
 cv::Mat read_chroma(const fs::path& dir, const SolveFolder& folder) {
-  const fs::path path = dir / "albedo_rgb.pfm";
+  const auto& name = folder.summary["files"]["albedo_colour_float"];
+  if (!name.is_string())
+    fail("{}: files.albedo_colour_float must be a file name", (dir / "summary.json").string());
+  const fs::path path = dir / name.get<std::string>();
   const cv::Mat colour = read_pfm(path);
   if (colour.type() != CV_32FC3 || colour.size() != folder.albedo.size())
     fail("{}: expected a colour PFM of {}x{} (normal.png's size)", path.string(), folder.albedo.cols,
@@ -271,7 +285,7 @@ cv::Mat SolveFolder::colour_albedo() const {
 
 cv::Mat SolveFolder::display_albedo() const {
   if (albedo.empty()) return {};
-  cv::Mat shown = colour_albedo() / albedo_png_scale;
+  cv::Mat shown = colour_albedo() / (chroma.empty() ? albedo_png_scale : albedo_rgb_png_scale);
   cv::min(shown, 1.0, shown);
   cv::max(shown, 0.0, shown);
   return shown;
@@ -310,7 +324,17 @@ SolveFolder read_solve_folder(const fs::path& dir) {
                   folder.albedo_png_scale / (png.depth() == CV_16U ? 65535.0 : 255.0));
     folder.albedo_from_png = true;
   }
-  if (!folder.albedo.empty() && fs::exists(dir / "albedo_rgb.pfm")) folder.chroma = read_chroma(dir, folder);
+  // Only what summary.json lists: an older colour solve's files may remain in a reused folder.
+  const auto files = folder.summary.find("files");
+  if (!folder.albedo.empty() && files != folder.summary.end() && files->is_object() &&
+      files->contains("albedo_colour_float")) {
+    folder.chroma = read_chroma(dir, folder);
+    const auto colour_scale = folder.summary.find("albedo_rgb_png_scale");
+    folder.albedo_rgb_png_scale = folder.albedo_png_scale;
+    if (colour_scale != folder.summary.end() && colour_scale->is_number() &&
+        std::isfinite(colour_scale->get<double>()) && colour_scale->get<double>() > 0)
+      folder.albedo_rgb_png_scale = colour_scale->get<double>();
+  }
   if (fs::exists(dir / "residual.pfm")) folder.residual = read_float_plane(dir / "residual.pfm", size);
   if (fs::exists(dir / "confidence.pfm")) folder.confidence = read_float_plane(dir / "confidence.pfm", size);
   read_reflectance(folder);

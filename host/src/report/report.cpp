@@ -207,8 +207,9 @@ std::string viewer_section(const SurfaceModel& model, const Inputs& in) {
           : std::string("Lambertian: albedo · max(0, n·l)");
   if (!model.chroma.empty()) model_text += ", in the albedo's colour (a specular lobe stays white)";
   // Colour results can be shown grey too, as `relight --grey` writes them.
-  const std::string grey_box =
-      model.chroma.empty() ? std::string() : "<label><input id=\"viewer-grey\" type=\"checkbox\"> grey</label>\n";
+  const std::string grey_box = model.chroma.empty()
+                                   ? std::string()
+                                   : "<label><input id=\"viewer-grey\" type=\"checkbox\"> grey</label>\n";
   std::string html = fmt::format(
       "<p>Drag on the hemisphere (mouse, pen or finger) to move a distant light; or focus it and use the "
       "arrow keys "
@@ -242,7 +243,8 @@ std::string surface_section(const Inputs& in, const io::DecodedNormals& normals,
       figure(png_data_uri(normal_sphere_legend(160)), "reference sphere",
              "Reference: a sphere's normals in the same code (the light toward the camera is the centre).",
              "legend");
-  const double scale = in.summary.value("albedo_png_scale", 0.0);
+  const double scale =
+      in.summary.value(albedo.channels() == 3 ? "albedo_rgb_png_scale" : "albedo_png_scale", 0.0);
   const double shown = scale > 0 ? scale : std::max(quantile(grey_albedo, normals.valid, 0.995), 1e-12);
   html +=
       figure(png_data_uri(grey(albedo, normals.valid, shown)), "albedo",

@@ -40,7 +40,7 @@ SurfaceModel load_surface_model(const io::SolveFolder& folder, int max_pixels,
   const nlohmann::json& summary = folder.summary;
   SurfaceModel model;
   model.source_size = relight_model.normals.size();
-  model.display_scale = folder.albedo_png_scale;
+  model.display_scale = folder.chroma.empty() ? folder.albedo_png_scale : folder.albedo_rgb_png_scale;
   if (folder.albedo.empty())
     notes.push_back(
         "No albedo.pfm or albedo.png in the result folder: the viewer (like `lightstage relight`) uses "
@@ -108,7 +108,7 @@ double shade(const SurfaceModel& model, int x, int y, const Vec3& light) {
     const Vec3 h = (l + Vec3::UnitZ()).normalized();
     return evaluate_relighting_brdf(model.order, model.lobe_width, c, n.dot(h), l.dot(h)) * nl;
   }
-  return model.albedo.at<float>(y, x) * nl;
+  return std::max(0.0f, model.albedo.at<float>(y, x)) * nl;
 }
 
 namespace {

@@ -102,6 +102,7 @@ async function start() {
   });
   const grey = document.getElementById('viewer-grey');
   if (grey) {
+    grey.checked = false;  // a reload may restore the box; the canvas starts in colour
     grey.addEventListener('change', () => {
       display.grey = grey.checked;
       render();

@@ -74,7 +74,7 @@ class ExrFile {
 // ExrFile(path).read(channels).
 cv::Mat read_exr(const std::filesystem::path& path, const std::vector<std::string>& channels);
 
-// Writes CV_32FC1, CV_32FC3 or CV_32FC4 as 32-bit FLOAT channels with ZIP compression,
+// Writes CV_32FC1 or CV_32FC3 as 32-bit FLOAT channels with ZIP compression,
 // atomically (a temporary file beside it, then a rename); channel i of the
 // image is named channels[i]. Throws InputError naming the file for another
 // type, names that do not match the channels (wrong count, empty, repeated),

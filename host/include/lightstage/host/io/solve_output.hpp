@@ -8,9 +8,12 @@
 //   albedo.pfm      float albedo (0 where not solved)
 //   residual.pfm    float RMS residual of the fit (0 where not solved)
 //   normal.exr      float normals, channels R G B = x y z (0 where not solved)
-//   albedo.exr      float albedo, channel Y (colour stacks: also R G B, the colour albedo)
-//   albedo_rgb.pfm  colour stacks: float colour albedo = albedo · chroma (radiometry.hpp)
-//   albedo_rgb.png  colour stacks: 16-bit RGB at albedo.png's scale
+//   albedo.exr      float albedo, channel Y
+//   albedo_rgb.pfm  colour stacks: float colour albedo = albedo · chroma (radiometry.hpp),
+//                   listed in summary.json files.albedo_colour_float (read only then)
+//   albedo_rgb.exr  colour stacks: the same, channels R G B
+//   albedo_rgb.png  colour stacks: 16-bit RGB, white at summary.json albedo_rgb_png_scale
+//                   (the 99.5th percentile of every channel, so saturated colours keep their hue)
 //   summary.json    method, parameters, summary fields, time, input, software version
 //   confidence.pfm  when the method gives one: float confidence in [0, 1]
 //                   (normal_confidence.hpp: 1 / (1 + predicted error / scale))
@@ -52,11 +55,13 @@ struct SolveFolder {
   // albedo_png_scale of summary.json; empty when the folder has neither.
   cv::Mat albedo;
   bool albedo_from_png = false;  // albedo came from the 16-bit PNG (quantised, clipped at the scale)
-  // CV_32FC3 (b, g, r) chroma: albedo_rgb.pfm / albedo; empty for grey results.
+  // CV_32FC3 (b, g, r) chroma: albedo_rgb.pfm / albedo (neutral where the albedo
+  // is 0); empty for grey results.
   cv::Mat chroma;
-  double albedo_png_scale = 1;  // summary.json's, 1 when absent or not positive
-  cv::Mat residual;             // CV_32FC1 or empty
-  cv::Mat confidence;           // CV_32FC1 or empty
+  double albedo_rgb_png_scale = 1;  // summary.json's, for colour results
+  double albedo_png_scale = 1;      // summary.json's, 1 when absent or not positive
+  cv::Mat residual;                 // CV_32FC1 or empty
+  cv::Mat confidence;               // CV_32FC1 or empty
   // The per-pixel reflectance model: CV_32FC(k) from files.brdf, with order > 0 for a
   // bi-polynomial (k + 1 channels with reflectance.specular); empty (order 0)
   // when the method fitted none.
@@ -67,7 +72,7 @@ struct SolveFolder {
 
   // albedo · chroma (CV_32FC3, BGR) for colour results, else the grey albedo.
   cv::Mat colour_albedo() const;
-  // colour_albedo() / albedo_png_scale clipped to [0, 1]: what albedo_rgb.png
+  // colour_albedo() over its PNG's scale, clipped to [0, 1]: what albedo_rgb.png
   // or albedo.png shows (for mesh colours and pictures). Empty when there is
   // no albedo.
   cv::Mat display_albedo() const;

@@ -35,11 +35,12 @@ struct SurfaceModel {
   cv::Mat chroma;        // CV_32FC3 (b, g, r) of a colour result, else empty (relight.hpp)
   cv::Mat coefficients;  // CV_32FC(terms) for kBiPolynomial (summary.json files.brdf), C_ij at i·(k+1)+j
   ShadingKind kind = ShadingKind::kLambertian;
-  int order = 0;               // bi-polynomial order k (1..3); 0 for Lambertian
-  double lobe_width = 0;       // > 0: the last coefficient weighs a specular lobe of this width
-  double display_scale = 1.0;  // the value shown as white (summary.json albedo_png_scale)
-  int stride = 1;              // every stride-th pixel of the result, in x and y
-  cv::Size source_size;        // the result's size before striding
+  int order = 0;          // bi-polynomial order k (1..3); 0 for Lambertian
+  double lobe_width = 0;  // > 0: the last coefficient weighs a specular lobe of this width
+  double display_scale =
+      1.0;         // the value shown as white (summary.json albedo_png_scale; colour: albedo_rgb_png_scale)
+  int stride = 1;  // every stride-th pixel of the result, in x and y
+  cv::Size source_size;  // the result's size before striding
 };
 
 // The viewer's model of a solve folder (io/solve_output.hpp): its normals,
