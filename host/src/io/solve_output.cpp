@@ -21,19 +21,37 @@
 
 namespace lightstage::io {
 
-double albedo_png_scale(const SolveResult& result) {
-  std::vector<float> values;
-  for (int y = 0; y < result.albedo.rows; ++y) {
-    for (int x = 0; x < result.albedo.cols; ++x) {
-      if (result.solved.at<std::uint8_t>(y, x) != 0) values.push_back(result.albedo.at<float>(y, x));
-    }
+namespace {
+
+// A PNG's white: the 99.5th percentile of every channel of `values` (CV_32FC1
+// or CV_32FC3) over the solved pixels, so that saturated colours keep their
+// hue; 1 when there are none or it is not positive.
+double png_white(const cv::Mat& values, const cv::Mat& solved) {
+  const int channels = values.channels();
+  std::vector<float> all;
+  for (int y = 0; y < values.rows; ++y) {
+    const float* row = values.ptr<float>(y);
+    for (int x = 0; x < values.cols; ++x)
+      if (solved.at<std::uint8_t>(y, x) != 0)
+        all.insert(all.end(), row + x * channels, row + (x + 1) * channels);
   }
-  if (values.empty()) return 1.0;
-  const auto index = static_cast<std::size_t>(std::floor(0.995 * static_cast<double>(values.size() - 1)));
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(index), values.end());
-  const double scale = values[index];
+  if (all.empty()) return 1.0;
+  const auto index = static_cast<std::size_t>(std::floor(0.995 * static_cast<double>(all.size() - 1)));
+  std::nth_element(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(index), all.end());
+  const double scale = all[index];
   return std::isfinite(scale) && scale > 0 ? scale : 1.0;
 }
+
+// albedo (CV_32FC1) · chroma (CV_32FC3, BGR) per channel.
+cv::Mat times_chroma(const cv::Mat& albedo, const cv::Mat& chroma) {
+  cv::Mat albedo3;
+  cv::merge(std::vector<cv::Mat>{albedo, albedo, albedo}, albedo3);
+  return albedo3.mul(chroma);
+}
+
+}  // namespace
+
+double albedo_png_scale(const SolveResult& result) { return png_white(result.albedo, result.solved); }
 
 namespace {
 
@@ -82,24 +100,7 @@ cv::Mat colour_albedo(const std::filesystem::path& dir, const SolveResult& resul
   if (result.chroma.empty()) return {};
   if (result.chroma.type() != CV_32FC3 || result.chroma.size() != result.albedo.size())
     fail("{}: cannot write solver outputs: the chroma must be CV_32FC3 of the albedo's size", dir.string());
-  cv::Mat albedo3;
-  cv::merge(std::vector<cv::Mat>{result.albedo, result.albedo, result.albedo}, albedo3);
-  return albedo3.mul(result.chroma);
-}
-
-// White of albedo_rgb.png: the 99.5th percentile of every channel over the
-// solved pixels, so that saturated colours keep their hue (1 when none).
-double colour_png_scale(const cv::Mat& colour, const cv::Mat& solved) {
-  std::vector<float> values;
-  for (int y = 0; y < colour.rows; ++y)
-    for (int x = 0; x < colour.cols; ++x)
-      if (solved.at<std::uint8_t>(y, x) != 0)
-        for (int c = 0; c < 3; ++c) values.push_back(colour.at<cv::Vec3f>(y, x)[c]);
-  if (values.empty()) return 1.0;
-  const auto index = static_cast<std::size_t>(std::floor(0.995 * static_cast<double>(values.size() - 1)));
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(index), values.end());
-  const double scale = values[index];
-  return std::isfinite(scale) && scale > 0 ? scale : 1.0;
+  return times_chroma(result.albedo, result.chroma);
 }
 
 }  // namespace
@@ -132,7 +133,7 @@ nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const Solve
   write_exr(dir / "normal.exr", result.normals, {"R", "G", "B"});  // R = x, as in normal.png
   write_exr(dir / "albedo.exr", result.albedo, {"Y"});
   const cv::Mat colour = colour_albedo(dir, result);
-  const double colour_scale = colour.empty() ? scale : colour_png_scale(colour, result.solved);
+  const double colour_scale = colour.empty() ? scale : png_white(colour, result.solved);
   if (!colour.empty()) {
     write_pfm(dir / "albedo_rgb.pfm", colour);
     write_exr(dir / "albedo_rgb.exr", colour, {"B", "G", "R"});
@@ -277,10 +278,7 @@ cv::Mat read_chroma(const fs::path& dir, const SolveFolder& folder) {
 }  // namespace
 
 cv::Mat SolveFolder::colour_albedo() const {
-  if (albedo.empty() || chroma.empty()) return albedo;
-  cv::Mat albedo3;
-  cv::merge(std::vector<cv::Mat>{albedo, albedo, albedo}, albedo3);
-  return albedo3.mul(chroma);
+  return albedo.empty() || chroma.empty() ? albedo : times_chroma(albedo, chroma);
 }
 
 cv::Mat SolveFolder::display_albedo() const {
