@@ -1,22 +1,23 @@
 #!/usr/bin/env bash
 # Installs every Debian 12 package that building and testing Lightstage needs.
 #   scripts/install-deps.sh [FLAVOUR...]   (the flavours of scripts/build.sh)
-# With arm64 also the controller board's cross build: Debian's arm64 cross
-# toolchain, the multiarch arm64 -dev packages and qemu's user-mode emulator
-# (which runs the cross-built tests), and unpacks into build-arm64/cross-root
-# (or $LIGHTSTAGE_CROSS_ROOT) the arm64 -dev packages that cannot be installed
-# beside their amd64 twins.
+# With fuzz also clang and its libFuzzer runtime. With arm64 also the controller
+# board's cross build: Debian's arm64 cross toolchain, the multiarch arm64 -dev
+# packages and qemu's user-mode emulator (which runs the cross-built tests), and
+# unpacks into build-arm64/cross-root (or $LIGHTSTAGE_CROSS_ROOT) the arm64 -dev
+# packages that cannot be installed beside their amd64 twins.
 # Idempotent: a no-op (no apt-get call at all) when everything is present.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 arm64=false
+fuzz=false
 for flavour in "$@"; do
   [ "$flavour" = arm64 ] && arm64=true
+  [ "$flavour" = fuzz ] && fuzz=true
 done
 
 packages=(
   build-essential cmake ninja-build pkg-config git
-  clang libclang-rt-14-dev
   libeigen3-dev
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-photo-dev
   libopenexr-dev
@@ -43,6 +44,7 @@ cross_packages=(
 unpacked_cross_packages=(libyaml-cpp-dev:arm64 libyaml-cpp0.7:arm64)
 cross_root=${LIGHTSTAGE_CROSS_ROOT:-$root/build-arm64/cross-root}
 $arm64 && packages+=("${cross_packages[@]}")
+$fuzz && packages+=(clang libclang-rt-14-dev)
 
 missing=()
 for p in "${packages[@]}"; do
