@@ -1,14 +1,16 @@
 // `lightstage import rti` and `export` end to end: a simulated stack is
-// written as a dome operator would have it (JPEG or 16-bit TIFF plus an .lp),
-// imported, solved, and its normals compared with the simulator's.
+// written as a dome operator would have it (JPEG, 16-bit TIFF or a DSLR's DNG
+// plus an .lp), imported, solved, and its normals compared with the simulator's.
 #include "lightstage/host/calibration/lp_file.hpp"
 #include "lightstage/host/eval/angular_error.hpp"
 #include "lightstage/host/io/rti_files.hpp"
 #include "lightstage/host/io/stack_io.hpp"
+#include "lightstage/sim/dng_writer.hpp"
 #include "lightstage/testing/paths.hpp"
 #include "lightstage/testing/run.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include <cmath>
@@ -18,6 +20,32 @@ namespace lightstage {
 namespace {
 
 using testing::run_lightstage;
+
+constexpr double kDngBlack = 256, kDngWhite = 16383;
+constexpr double kDngExposure = 1.0 / 60;
+
+// A DSLR's shot of `linear` (values in [0, 1], grey or BGR): an RGGB mosaic at
+// twice the size, each 2×2 block one pixel of the frame, 14-bit with a black level.
+void write_dng_shot(const std::filesystem::path& path, const cv::Mat& linear, std::size_t index) {
+  sim::DngShot shot;
+  shot.mosaic.create(linear.rows * 2, linear.cols * 2, CV_16UC1);
+  for (int y = 0; y < shot.mosaic.rows; ++y)
+    for (int x = 0; x < shot.mosaic.cols; ++x) {
+      const int site = (y % 2) * 2 + x % 2;
+      const int bgr = site == 0 ? 2 : site == 3 ? 0 : 1;
+      const float* px = linear.ptr<float>(y / 2) + (x / 2) * linear.channels();
+      const double v = linear.channels() == 3 ? px[bgr] : px[0];
+      shot.mosaic.at<std::uint16_t>(y, x) = static_cast<std::uint16_t>(
+          std::lround(std::min(kDngBlack + v * (kDngWhite - kDngBlack), kDngWhite)));
+    }
+  shot.black_level = {kDngBlack, kDngBlack, kDngBlack, kDngBlack};
+  shot.white_level = kDngWhite;
+  shot.exposure_s = kDngExposure;
+  shot.iso = 100;
+  shot.f_number = 11;
+  shot.taken = std::chrono::system_clock::time_point(std::chrono::seconds(1764780000 + index));
+  sim::write_dng(path, shot);
+}
 
 // Writes the stack's frames as `ext` files named like RTIBuilder's (absolute
 // Windows paths in the .lp), 8-bit ones sRGB-encoded.
@@ -29,6 +57,12 @@ void write_operator_folder(const ImageStack& stack, const std::filesystem::path&
     cv::Mat linear;
     stack.frames[i].image.convertTo(linear, CV_32F,
                                     stack.frames[i].image.depth() == CV_16U ? 1 / 65535.0 : 1 / 255.0);
+    const std::string name = "IMG_" + std::to_string(1000 + i) + ext;
+    lp.push_back({"C:\\capture\\jpeg-exports\\" + name, stack.frames[i].light_direction});
+    if (ext == ".dng") {
+      write_dng_shot(dir / name, linear, i);
+      continue;
+    }
     cv::Mat out;
     if (ext == ".jpg") {
       cv::Mat encoded = linear.clone();
@@ -39,9 +73,7 @@ void write_operator_folder(const ImageStack& stack, const std::filesystem::path&
     } else {
       linear.convertTo(out, CV_16U, 65535.0);
     }
-    const std::string name = "IMG_" + std::to_string(1000 + i) + ext;
     ASSERT_TRUE(cv::imwrite((dir / name).string(), out, {cv::IMWRITE_JPEG_QUALITY, 98}));
-    lp.push_back({"C:\\capture\\jpeg-exports\\" + name, stack.frames[i].light_direction});
   }
   std::ofstream(dir / "assembly-files.lp") << calibration::format_lp(lp);
 }
@@ -67,6 +99,22 @@ TEST_P(ImportRti, ImportsAndSolves) {
   // degrees (JPEG loses some); an unlinearised sRGB one is off by far more.
   EXPECT_LT(stats.mean, GetParam() == ".jpg" ? 3.0 : 1.0) << GetParam();
 
+  if (GetParam() == ".dng") {
+    // The camera's EXIF and the decode reach the manifest; the exposure is the frame's.
+    std::ifstream in(dir / "imported/manifest.json");
+    const auto manifest = nlohmann::json::parse(in);
+    EXPECT_EQ(manifest["import"]["raw_images"], stack.frames.size());
+    EXPECT_EQ(manifest["import"]["raw_demosaic"], "half");
+    const auto& frame = manifest["frames"][2];
+    EXPECT_EQ(frame["source_image"], "IMG_1002.dng");
+    EXPECT_NEAR(frame["exposure_us"].get<double>(), kDngExposure * 1e6, 1e-3);
+    EXPECT_NEAR(frame["exif"]["exposure_s"].get<double>(), kDngExposure, 1e-9);
+    EXPECT_EQ(frame["exif"]["iso"], 100);
+    EXPECT_EQ(frame["exif"]["taken"], "2025-12-03T16:40:02.000");
+    EXPECT_EQ(frame["raw"]["mosaic"], "RGGB");
+    EXPECT_EQ(frame["raw"]["white_level"], kDngWhite);
+  }
+
   // An existing, non-empty --out is refused and left alone.
   run = run_lightstage({"import", "rti", (dir / "photos").string(), "--out", (dir / "imported").string()});
   EXPECT_NE(run.exit_code, 0);
@@ -83,7 +131,7 @@ TEST_P(ImportRti, ImportsAndSolves) {
   EXPECT_EQ(io::read_hsh(dir / "object.rti").basis, RtiBasis::hsh2);
 }
 
-INSTANTIATE_TEST_SUITE_P(Formats, ImportRti, ::testing::Values(".jpg", ".tif"),
+INSTANTIATE_TEST_SUITE_P(Formats, ImportRti, ::testing::Values(".jpg", ".tif", ".dng"),
                          [](const auto& p) { return p.param.substr(1); });
 
 TEST(ImportRtiErrors, MissingImageNamesTheLpLine) {

@@ -48,7 +48,9 @@ void run(const Bytes& input) {
 // The edits libFuzzer's mutators start from, without its coverage feedback.
 Bytes mutate(const Bytes& input, const Bytes& other, std::mt19937_64& random) {
   Bytes out = input;
-  const auto pick = [&](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(random); };
+  const auto pick = [&](std::size_t n) {
+    return std::uniform_int_distribution<std::size_t>(0, n - 1)(random);
+  };
   const int edits = 1 + static_cast<int>(pick(4));
   for (int e = 0; e < edits; ++e) {
     switch (pick(6)) {
@@ -69,7 +71,8 @@ Bytes mutate(const Bytes& input, const Bytes& other, std::mt19937_64& random) {
         if (!out.empty()) {
           const std::size_t at = pick(out.size());
           const std::size_t n = 1 + pick(std::min<std::size_t>(16, out.size() - at));
-          out.erase(out.begin() + static_cast<std::ptrdiff_t>(at), out.begin() + static_cast<std::ptrdiff_t>(at + n));
+          out.erase(out.begin() + static_cast<std::ptrdiff_t>(at),
+                    out.begin() + static_cast<std::ptrdiff_t>(at + n));
         }
         break;
       case 4:  // truncate
@@ -87,7 +90,9 @@ Bytes mutate(const Bytes& input, const Bytes& other, std::mt19937_64& random) {
   return out;
 }
 
-bool starts_with(std::string_view text, std::string_view prefix) { return text.substr(0, prefix.size()) == prefix; }
+bool starts_with(std::string_view text, std::string_view prefix) {
+  return text.substr(0, prefix.size()) == prefix;
+}
 
 }  // namespace
 

@@ -1,7 +1,10 @@
 #include "lightstage/pipeline/rti_exchange.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/log.hpp"
 #include "lightstage/host/calibration/lp_file.hpp"
+#include "lightstage/host/io/exif.hpp"
+#include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/output_folder.hpp"
 #include "lightstage/host/io/relight_web.hpp"
 #include "lightstage/host/io/rti_files.hpp"
@@ -276,21 +279,35 @@ nlohmann::json import_rti(const ImportSettings& s) {
   const auto entries = calibration::read_lp(lp);
   if (entries.size() < 3) fail("{}: {} lights; a stack needs at least 3", lp.string(), entries.size());
   ImageStack stack;
-  int eight_bit = 0, sixteen_bit = 0;
+  int eight_bit = 0, sixteen_bit = 0, raw_files = 0;
+  nlohmann::json frames_extra = nlohmann::json::array();
   for (std::size_t i = 0; i < entries.size(); ++i) {
     const std::string where = fmt::format("{}:{}", lp.string(), i + 2);
     const std::string name = io::rti_image_name(entries[i].filename, where);
     const std::filesystem::path file = s.input / name;
     if (!std::filesystem::is_regular_file(file))
       fail("{}: image: {} is not in {}", where, name, s.input.string());
-    cv::Mat raw = cv::imread(file.string(), cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
-    if (raw.empty()) fail("{}: not an image OpenCV can read (JPEG, PNG, TIFF)", file.string());
-    if (raw.channels() == 4) cv::cvtColor(raw, raw, cv::COLOR_BGRA2BGR);
-    if (raw.channels() != 1 && raw.channels() != 3)
-      fail("{}: channels: {} (1 or 3 expected)", file.string(), raw.channels());
-    (raw.depth() == CV_8U ? eight_bit : sixteen_bit) += 1;
+    nlohmann::json extra = {{"source_image", name}};
+    cv::Mat photo;
+    if (io::is_raw_file(file)) {
+      io::RawImage decoded = io::read_raw(file, s.raw_demosaic);
+      photo = std::move(decoded.image);
+      extra["raw"] = decoded.describe();
+      ++raw_files;
+    } else {
+      photo = io::read_image(file);
+      (photo.depth() == CV_8U ? eight_bit : sixteen_bit) += 1;
+    }
     Frame frame;
-    frame.image = io::linear_frame(raw, response, file.string());
+    try {
+      const io::ExifInfo exif = io::read_exif(file);
+      if (!exif.empty()) extra["exif"] = exif.to_json();
+      if (exif.exposure_s) frame.exposure_us = *exif.exposure_s * 1e6;
+    } catch (const InputError& e) {
+      // The pixels decoded: a damaged EXIF block costs the metadata, not the frame.
+      logger("host")->warn("{}", e.what());
+    }
+    frame.image = io::linear_frame(photo, response, file.string());
     frame.filename = fmt::format("{:03d}.png", i + 1);
     frame.light_direction = entries[i].direction.normalized();
     if (!stack.frames.empty() && (frame.image.size() != stack.frames[0].image.size() ||
@@ -298,17 +315,19 @@ nlohmann::json import_rti(const ImportSettings& s) {
       fail("{}: size or channels differ from {}", file.string(),
            io::rti_image_name(entries[0].filename, lp.string()));
     stack.frames.push_back(std::move(frame));
+    frames_extra.push_back(std::move(extra));
   }
   nlohmann::json sources = nlohmann::json::array();
   for (const auto& e : entries) sources.push_back(io::rti_image_name(e.filename, lp.string()));
-  const nlohmann::json info = {
-      {"from", s.input.string()},
-      {"lp", lp.string()},
-      {"images", sources},
-      {"linearised", response ? "response " + s.response.string() : std::string("srgb")},
-      {"eight_bit_images", eight_bit},
-      {"sixteen_bit_images_taken_as_linear", sixteen_bit}};
-  io::write_stack(s.out, stack, {{"import", info}});
+  nlohmann::json info = {{"from", s.input.string()},
+                         {"lp", lp.string()},
+                         {"images", sources},
+                         {"linearised", response ? "response " + s.response.string() : std::string("srgb")},
+                         {"eight_bit_images", eight_bit},
+                         {"sixteen_bit_images_taken_as_linear", sixteen_bit},
+                         {"raw_images", raw_files}};
+  if (raw_files > 0) info["raw_demosaic"] = io::to_string(s.raw_demosaic);
+  io::write_stack(s.out, stack, {{"import", info}, {"frames", frames_extra}});
   return info;
 }
 

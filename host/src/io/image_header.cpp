@@ -1,7 +1,10 @@
 #include "io/image_header.hpp"
 
+#include "io/file_extension.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/pfm.hpp"
+#include "lightstage/host/io/raw_image.hpp"
+#include "lightstage/host/io/tiff_image.hpp"
 
 #include <algorithm>
 #include <array>
@@ -17,13 +20,6 @@ namespace {
 constexpr std::size_t kHeaderBytes = 4096;
 
 constexpr std::array<unsigned char, 8> kPngSignature = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-
-std::string lower_extension(const std::filesystem::path& path) {
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return extension;
-}
 
 std::uint32_t big_endian(const std::string& bytes, std::size_t at) {
   std::uint32_t value = 0;
@@ -59,12 +55,16 @@ ImageHeader read_image_header(const std::filesystem::path& path) {
     const PfmHeader pfm = parse_pfm_header(path, bytes);
     return {pfm.width, pfm.height};
   }
+  if (is_raw_file(path) || is_tiff_file(path)) {
+    const cv::Size size = is_raw_file(path) ? read_raw_size(path) : read_tiff_size(path);
+    return {size.width, size.height};
+  }
   if (bytes.size() >= kPngSignature.size() &&
       std::equal(kPngSignature.begin(), kPngSignature.end(), bytes.begin(),
                  [](unsigned char a, char b) { return a == static_cast<unsigned char>(b); })) {
     return png_header(path, bytes);
   }
-  fail("{}: not a readable image (stack images are PNG or PFM)", path.string());
+  fail("{}: not a readable image (stack images are PNG, PFM, TIFF or camera RAW)", path.string());
 }
 
 }  // namespace lightstage::io

@@ -1,9 +1,10 @@
 #pragma once
 // The size an image file declares, read from its first bytes without decoding
 // it, so a stack can refuse a frame that would not fit (or would not fit in
-// memory) before any pixel is decoded. Stack images are PNG or PFM
-// (docs/stack-format.md): a PNG is known by its signature, as the decoder
-// knows it (whatever the file's name), a PFM by its name, as read_image reads it.
+// memory) before any pixel is decoded. Stack images are PNG, PFM, TIFF or
+// camera RAW (docs/stack-format.md): a PNG is known by its signature, as the
+// decoder knows it (whatever the file's name); the others by their names, as
+// read_image reads them (a RAW file's size is the size read_raw gives).
 
 #include <cstdint>
 #include <filesystem>
@@ -15,8 +16,8 @@ struct ImageHeader {
   std::int64_t height = 0;
 };
 
-// Throws InputError naming the file when it is missing, is neither a PNG nor
-// a .pfm, or its header is truncated or malformed.
+// Throws InputError naming the file when it is missing, is none of those, or
+// its header is truncated or malformed.
 ImageHeader read_image_header(const std::filesystem::path& path);
 
 }  // namespace lightstage::io

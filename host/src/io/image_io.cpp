@@ -1,7 +1,10 @@
 #include "lightstage/host/io/image_io.hpp"
 
+#include "io/file_extension.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/pfm.hpp"
+#include "lightstage/host/io/raw_image.hpp"
+#include "lightstage/host/io/tiff_image.hpp"
 #include "util/atomic_file.hpp"
 
 #include <opencv2/imgcodecs.hpp>
@@ -17,13 +20,6 @@
 namespace lightstage::io {
 namespace {
 
-std::string lower_extension(const std::filesystem::path& path) {
-  auto extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return extension;
-}
-
 std::string describe_type(const cv::Mat& image) {
   return fmt::format("{}-bit depth code {}, {} channel(s)", image.elemSize1() * 8, image.depth(),
                      image.channels());
@@ -36,6 +32,8 @@ cv::Mat read_image(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path, error)) fail("{}: no such file", path.string());
   if (!std::filesystem::is_regular_file(path, error)) fail("{}: not a regular file", path.string());
   if (lower_extension(path) == ".pfm") return read_pfm(path);
+  if (is_raw_file(path)) return read_raw(path).image;
+  if (is_tiff_file(path)) return read_tiff(path);
 
   cv::Mat image;
   try {

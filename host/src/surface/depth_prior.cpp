@@ -1,5 +1,6 @@
 #include "lightstage/host/surface/depth_prior.hpp"
 
+#include "io/file_extension.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/exr.hpp"
 #include "lightstage/host/io/image_io.hpp"
@@ -120,8 +121,7 @@ DepthMap load_depth_prior(const std::filesystem::path& path, const CameraModel& 
                           const DepthPriorOptions& options) {
   options.check();
   camera.check();
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return std::tolower(ch); });
+  const std::string ext = io::lower_extension(path);
   DepthMap out;
   if (ext == ".ply") {
     out = render_depth(read_ply(path), camera);

@@ -12,7 +12,10 @@ namespace lightstage::io {
 
 // Reads an image as stored: CV_8U or CV_16U with 1 or 3 channels (an alpha
 // channel is dropped, 2-channel grey+alpha keeps the grey), or CV_32FC1 /
-// CV_32FC3 for .pfm files. Throws InputError naming the file when it is
+// CV_32FC3 for .pfm files. By name: .pfm through pfm.hpp, .tif/.tiff through
+// libtiff (tiff_image.hpp, float samples too), camera RAW files (.dng, .cr2,
+// .nef, ...) decoded linear at half size (raw_image.hpp); anything else by
+// its content through OpenCV. Throws InputError naming the file when it is
 // missing, not an image, or of an unsupported depth.
 cv::Mat read_image(const std::filesystem::path& path);
 

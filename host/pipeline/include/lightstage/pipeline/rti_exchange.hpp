@@ -6,6 +6,8 @@
 //                   the solve methods that relight (bi-polynomial, auto)
 //   import_rti      a folder of photographs plus an .lp file -> a stack folder
 
+#include "lightstage/host/io/raw_image.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
@@ -60,17 +62,21 @@ nlohmann::json rti_holdout(const HoldoutSettings& settings);
 std::string format_holdout_table(const nlohmann::json& result);
 
 struct ImportSettings {
-  std::filesystem::path input;     // folder of JPEG / PNG / TIFF photographs
+  std::filesystem::path input;     // folder of JPEG / PNG / TIFF / camera RAW photographs
   std::filesystem::path lp;        // empty = the one .lp file in `input`
   std::filesystem::path response;  // empty = sRGB curve for 8-bit images; else a `camera response` JSON
   std::filesystem::path out;       // stack folder to create; must be absent or empty
+  io::RawDemosaic raw_demosaic = io::RawDemosaic::half;  // for RAW photographs (io/raw_image.hpp)
 };
 
 // Reads the .lp, finds each image it names in `input` (by its last path
-// component), linearises it (io/rti_import.hpp) and writes a stack folder
-// (docs/stack-format.md): 16-bit PNG frames, light_directions.txt from the
-// .lp, a manifest saying where it came from. Returns the manifest's "import"
-// entry. Throws InputError naming the .lp line, the image or --out.
+// component), linearises it (io/rti_import.hpp; RAW files are linear as
+// decoded, io/raw_image.hpp) and writes a stack folder (docs/stack-format.md):
+// 16-bit PNG frames, light_directions.txt from the .lp, a manifest saying
+// where it came from, with each frame's source file, its EXIF (io/exif.hpp;
+// the exposure time also as exposure_us) and, for RAW files, the decode.
+// Returns the manifest's "import" entry. Throws InputError naming the .lp
+// line, the image or --out.
 nlohmann::json import_rti(const ImportSettings& settings);
 
 }  // namespace lightstage::pipeline

@@ -1,0 +1,33 @@
+#pragma once
+// What a camera recorded about a shot, from the file's EXIF (through exiv2):
+// JPEG, TIFF and the RAW formats exiv2 reads (DNG, CR2, CR3, NEF, ARW, ...).
+// An import puts it into the stack's manifest (docs/stack-format.md).
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace lightstage::io {
+
+struct ExifInfo {
+  std::string make, model;
+  std::optional<double> exposure_s;  // ExposureTime
+  std::optional<double> iso;         // ISOSpeedRatings
+  std::optional<double> f_number;    // FNumber
+  // DateTimeOriginal (and SubSecTimeOriginal) as "YYYY-MM-DDTHH:MM:SS[.fff]":
+  // the camera's clock, which EXIF records without a time zone.
+  std::optional<std::string> taken;
+
+  bool empty() const;
+  // The fields present, as {"make", "model", "exposure_s", "iso", "f_number", "taken"}.
+  nlohmann::json to_json() const;
+};
+
+// Reads the EXIF of `path`. Fields the file does not hold (or holds malformed:
+// a zero denominator, an unparsable date) stay empty. Throws InputError naming
+// the file when it is missing or exiv2 cannot read it.
+ExifInfo read_exif(const std::filesystem::path& path);
+
+}  // namespace lightstage::io

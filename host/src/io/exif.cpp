@@ -1,0 +1,112 @@
+#include "lightstage/host/io/exif.hpp"
+
+#include "lightstage/common/error.hpp"
+
+#include <exiv2/exiv2.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <exception>
+#include <mutex>
+#include <system_error>
+
+namespace lightstage::io {
+namespace {
+
+void initialise_exiv2() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    Exiv2::LogMsg::setLevel(Exiv2::LogMsg::mute);  // failures reach the caller as InputError
+    Exiv2::XmpParser::initialize();                // once, before threads read files
+    Exiv2::enableBMFF(true);                       // CR3
+  });
+}
+
+const Exiv2::Exifdatum* find(const Exiv2::ExifData& exif, const char* key) {
+  const auto it = exif.findKey(Exiv2::ExifKey(key));
+  return it == exif.end() || it->count() == 0 ? nullptr : &*it;
+}
+
+std::optional<double> positive_number(const Exiv2::ExifData& exif, const char* key) {
+  const Exiv2::Exifdatum* datum = find(exif, key);
+  if (datum == nullptr) return std::nullopt;
+  double value = 0;
+  if (datum->typeId() == Exiv2::unsignedRational || datum->typeId() == Exiv2::signedRational) {
+    const Exiv2::Rational r = datum->toRational();
+    if (r.second == 0) return std::nullopt;
+    value = static_cast<double>(r.first) / r.second;
+  } else {
+    value = static_cast<double>(datum->toFloat());
+  }
+  if (!std::isfinite(value) || value <= 0) return std::nullopt;
+  return value;
+}
+
+std::string text(const Exiv2::ExifData& exif, const char* key) {
+  const Exiv2::Exifdatum* datum = find(exif, key);
+  if (datum == nullptr) return {};
+  std::string value = datum->toString();
+  while (!value.empty() && (value.back() == '\0' || std::isspace(static_cast<unsigned char>(value.back()))))
+    value.pop_back();
+  return value;
+}
+
+// "YYYY:MM:DD HH:MM:SS" (+ sub-seconds) as "YYYY-MM-DDTHH:MM:SS[.fff]".
+std::optional<std::string> taken(const Exiv2::ExifData& exif) {
+  std::string when = text(exif, "Exif.Photo.DateTimeOriginal");
+  if (when.size() != 19) return std::nullopt;
+  for (std::size_t i = 0; i < when.size(); ++i) {
+    const bool digit = std::isdigit(static_cast<unsigned char>(when[i])) != 0;
+    const char separator = i == 4 || i == 7 ? ':' : i == 10 ? ' ' : i == 13 || i == 16 ? ':' : '0';
+    if (separator == '0' ? !digit : when[i] != separator) return std::nullopt;
+  }
+  when[4] = '-';
+  when[7] = '-';
+  when[10] = 'T';
+  const std::string subsec = text(exif, "Exif.Photo.SubSecTimeOriginal");
+  if (!subsec.empty() && subsec.size() <= 9 &&
+      std::all_of(subsec.begin(), subsec.end(), [](unsigned char c) { return std::isdigit(c) != 0; }))
+    when += "." + subsec;
+  return when;
+}
+
+}  // namespace
+
+bool ExifInfo::empty() const {
+  return make.empty() && model.empty() && !exposure_s && !iso && !f_number && !taken;
+}
+
+nlohmann::json ExifInfo::to_json() const {
+  nlohmann::json out = nlohmann::json::object();
+  if (!make.empty()) out["make"] = make;
+  if (!model.empty()) out["model"] = model;
+  if (exposure_s) out["exposure_s"] = *exposure_s;
+  if (iso) out["iso"] = *iso;
+  if (f_number) out["f_number"] = *f_number;
+  if (taken) out["taken"] = *taken;
+  return out;
+}
+
+ExifInfo read_exif(const std::filesystem::path& path) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) fail("{}: no such file", path.string());
+  initialise_exiv2();
+  ExifInfo info;
+  try {
+    auto image = Exiv2::ImageFactory::open(path.string());
+    image->readMetadata();
+    const Exiv2::ExifData& exif = image->exifData();
+    info.make = text(exif, "Exif.Image.Make");
+    info.model = text(exif, "Exif.Image.Model");
+    info.exposure_s = positive_number(exif, "Exif.Photo.ExposureTime");
+    info.iso = positive_number(exif, "Exif.Photo.ISOSpeedRatings");
+    info.f_number = positive_number(exif, "Exif.Photo.FNumber");
+    info.taken = taken(exif);
+  } catch (const std::exception& e) {
+    fail("{}: cannot read its EXIF ({})", path.string(), e.what());
+  }
+  return info;
+}
+
+}  // namespace lightstage::io

@@ -1,0 +1,314 @@
+#include "lightstage/host/io/raw_image.hpp"
+
+#include "io/file_extension.hpp"
+#include "lightstage/common/error.hpp"
+#include "lightstage/host/io/stack_io.hpp"
+
+#include <fmt/format.h>
+#include <libraw/libraw.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <string_view>
+#include <system_error>
+
+namespace lightstage::io {
+namespace {
+
+constexpr std::string_view kRawExtensions[] = {
+    ".dng", ".cr2", ".cr3", ".crw", ".nef", ".nrw", ".arw", ".srf", ".sr2", ".orf", ".rw2", ".raf", ".pef",
+    ".srw", ".3fr", ".fff", ".iiq", ".erf", ".kdc", ".dcr", ".mos", ".mef", ".mrw", ".x3f", ".rwl", ".raw"};
+constexpr double kFullScale = 65535.0;
+constexpr unsigned kXTrans = 9;  // LibRaw's `filters` for a 6×6 X-Trans mosaic
+constexpr unsigned kPatternedFilters = 1000;
+// Twice a stack's largest side (binning halves it); no camera's sensor is larger.
+constexpr int kMaxSensorSide = 2 * static_cast<int>(kMaxImageSide);
+
+struct LibRawDeleter {
+  void operator()(LibRaw* raw) const { delete raw; }
+};
+using RawHandle = std::unique_ptr<LibRaw, LibRawDeleter>;
+
+// LibRaw reports data corruption through a callback and reads on; we stop.
+void note_data_error(void* data, const char*, const int offset) {
+  auto* first = static_cast<int*>(data);
+  if (*first < 0) *first = std::max(offset, 0);
+}
+
+RawHandle open_raw(const std::filesystem::path& path, int* data_error) {
+  std::error_code error;
+  if (!std::filesystem::exists(path, error)) fail("{}: no such file", path.string());
+  if (!std::filesystem::is_regular_file(path, error)) fail("{}: not a regular file", path.string());
+  RawHandle raw(new LibRaw(LIBRAW_OPTIONS_NONE));
+  raw->set_dataerror_handler(note_data_error, data_error);
+  const int rc = raw->open_file(path.c_str());
+  if (rc != LIBRAW_SUCCESS)
+    fail("{}: not a RAW file LibRaw can read ({})", path.string(), libraw_strerror(rc));
+  const auto& sizes = raw->imgdata.sizes;
+  if (sizes.width < 2 || sizes.height < 2 || sizes.width > kMaxSensorSide || sizes.height > kMaxSensorSide)
+    fail("{}: RAW image of {}x{} pixels (each side 2 to {})", path.string(), sizes.width, sizes.height,
+         kMaxSensorSide);
+  return raw;
+}
+
+// The 2×2 colour letters of a Bayer mosaic ("RGGB", ...), or empty when the
+// mosaic does not repeat every 2×2 pixels or is not red, two greens and blue.
+std::string bayer_pattern(LibRaw& raw) {
+  const unsigned filters = raw.imgdata.idata.filters;
+  if (filters < kPatternedFilters) return {};
+  for (int row = 0; row < 16; ++row)
+    for (int col = 0; col < 2; ++col)
+      if (raw.COLOR(row, col) != raw.COLOR(row % 2, col)) return {};
+  std::string letters;
+  for (int site = 0; site < 4; ++site) {
+    const int colour = raw.COLOR(site / 2, site % 2);
+    letters += colour >= 0 && colour < 4 ? raw.imgdata.idata.cdesc[colour] : '?';
+  }
+  std::string sorted = letters;
+  std::sort(sorted.begin(), sorted.end());
+  return sorted == "BGGR" ? letters : std::string();
+}
+
+// The black level of one pixel (visible coordinates) of colour `colour`:
+// LibRaw's common level, the colour's level and the pattern level.
+struct BlackLevels {
+  const libraw_colordata_t* colour_data = nullptr;
+  unsigned pattern_rows = 0, pattern_cols = 0;
+
+  double at(int row, int col, int colour) const {
+    const auto& c = *colour_data;
+    double black = c.black + c.cblack[std::clamp(colour, 0, 3)];
+    if (pattern_rows > 0 && pattern_cols > 0)
+      black += c.cblack[6 + (static_cast<unsigned>(row) % pattern_rows) * pattern_cols +
+                        static_cast<unsigned>(col) % pattern_cols];
+    return black;
+  }
+};
+
+BlackLevels black_levels(const std::filesystem::path& path, const libraw_colordata_t& colour) {
+  BlackLevels levels;
+  levels.colour_data = &colour;
+  levels.pattern_rows = colour.cblack[4];
+  levels.pattern_cols = colour.cblack[5];
+  if (levels.pattern_rows * levels.pattern_cols > 4096)
+    fail("{}: black level pattern of {}x{} sites", path.string(), levels.pattern_rows, levels.pattern_cols);
+  return levels;
+}
+
+// One site's value on the output scale: 65535 at or above white, else at most 65534.
+double normalised(unsigned value, double black, double white) {
+  if (value >= white) return kFullScale;
+  return std::clamp((value - black) / (white - black) * kFullScale, 0.0, kFullScale - 1);
+}
+
+std::uint16_t rounded(double value) {
+  return static_cast<std::uint16_t>(value >= kFullScale ? kFullScale
+                                                        : std::min(std::round(value), kFullScale - 1));
+}
+
+class RawPixels {
+ public:
+  explicit RawPixels(const LibRaw& raw)
+      : data_(raw.imgdata.rawdata.raw_image),
+        pitch_(raw.imgdata.sizes.raw_pitch / sizeof(std::uint16_t)),
+        top_(raw.imgdata.sizes.top_margin),
+        left_(raw.imgdata.sizes.left_margin) {}
+  unsigned at(int row, int col) const { return data_[(row + top_) * pitch_ + col + left_]; }
+
+ private:
+  const std::uint16_t* data_;
+  std::size_t pitch_;
+  std::size_t top_, left_;
+};
+
+// Half size: each 2×2 block's red, mean green and blue; BGR in memory.
+cv::Mat bin_bayer(LibRaw& raw, const BlackLevels& black, double white) {
+  const int width = raw.imgdata.sizes.width / 2, height = raw.imgdata.sizes.height / 2;
+  const RawPixels pixels(raw);
+  int channel_of_site[4];  // BGR channel of each site of the 2×2 block
+  for (int site = 0; site < 4; ++site) {
+    const char letter = raw.imgdata.idata.cdesc[raw.COLOR(site / 2, site % 2)];
+    channel_of_site[site] = letter == 'R' ? 2 : letter == 'G' ? 1 : 0;
+  }
+  cv::Mat out(height, width, CV_16UC3);
+  for (int y = 0; y < height; ++y) {
+    auto* row = out.ptr<std::uint16_t>(y);
+    for (int x = 0; x < width; ++x) {
+      double sum[3] = {0, 0, 0};
+      bool clipped[3] = {false, false, false};
+      for (int site = 0; site < 4; ++site) {
+        const int r = 2 * y + site / 2, c = 2 * x + site % 2;
+        const double v = normalised(pixels.at(r, c), black.at(r, c, raw.COLOR(r, c)), white);
+        const int channel = channel_of_site[site];
+        sum[channel] += v;
+        clipped[channel] = clipped[channel] || v >= kFullScale;
+      }
+      for (int channel = 0; channel < 3; ++channel) {
+        const double mean = channel == 1 ? sum[1] / 2 : sum[channel];
+        row[3 * x + channel] = clipped[channel] ? static_cast<std::uint16_t>(kFullScale) : rounded(mean);
+      }
+    }
+  }
+  return out;
+}
+
+cv::Mat monochrome(LibRaw& raw, const BlackLevels& black, double white) {
+  const RawPixels pixels(raw);
+  cv::Mat out(raw.imgdata.sizes.height, raw.imgdata.sizes.width, CV_16UC1);
+  for (int y = 0; y < out.rows; ++y) {
+    auto* row = out.ptr<std::uint16_t>(y);
+    for (int x = 0; x < out.cols; ++x)
+      row[x] = rounded(normalised(pixels.at(y, x), black.at(y, x, 0), white));
+  }
+  return out;
+}
+
+// A linear DNG (or sRAW): three or four values per pixel, already demosaiced.
+cv::Mat linear(LibRaw& raw, const BlackLevels& black, double white) {
+  const auto& sizes = raw.imgdata.sizes;
+  const auto& rawdata = raw.imgdata.rawdata;
+  const int values = rawdata.color4_image != nullptr ? 4 : 3;
+  const auto* base =
+      rawdata.color4_image != nullptr ? &rawdata.color4_image[0][0] : &rawdata.color3_image[0][0];
+  const std::size_t pitch = sizes.raw_pitch / sizeof(std::uint16_t);
+  cv::Mat out(sizes.height, sizes.width, CV_16UC3);
+  for (int y = 0; y < out.rows; ++y) {
+    const std::uint16_t* in = base + (y + sizes.top_margin) * pitch + sizes.left_margin * values;
+    auto* row = out.ptr<std::uint16_t>(y);
+    for (int x = 0; x < out.cols; ++x)
+      for (int c = 0; c < 3; ++c)  // R, G, B in the file; B, G, R in memory
+        row[3 * x + 2 - c] = rounded(normalised(in[x * values + c], black.at(y, x, c), white));
+  }
+  return out;
+}
+
+// LibRaw's own demosaic with nothing but black subtraction and scaling to white.
+cv::Mat demosaic_full(const std::filesystem::path& path, LibRaw& raw) {
+  auto& params = raw.imgdata.params;
+  params.output_bps = 16;
+  params.gamm[0] = 1;
+  params.gamm[1] = 1;
+  params.no_auto_bright = 1;
+  params.use_camera_wb = 0;
+  params.use_auto_wb = 0;
+  std::fill(std::begin(params.user_mul), std::end(params.user_mul), 1.0f);
+  params.output_color = 0;  // the camera's raw colour space: no matrix
+  params.use_camera_matrix = 0;
+  params.highlight = 0;           // clip at white
+  params.adjust_maximum_thr = 0;  // the file's white level, not the brightest value seen
+  params.user_flip = 0;           // sensor orientation, as the half-size path keeps it
+  params.half_size = 0;
+  int rc = raw.dcraw_process();
+  if (rc != LIBRAW_SUCCESS) fail("{}: cannot demosaic ({})", path.string(), libraw_strerror(rc));
+  std::unique_ptr<libraw_processed_image_t, void (*)(libraw_processed_image_t*)> image(
+      raw.dcraw_make_mem_image(&rc), LibRaw::dcraw_clear_mem);
+  if (!image || rc != LIBRAW_SUCCESS) fail("{}: cannot demosaic ({})", path.string(), libraw_strerror(rc));
+  if (image->type != LIBRAW_IMAGE_BITMAP || image->bits != 16 || (image->colors != 3 && image->colors != 1))
+    fail("{}: LibRaw gave a {}-bit image of {} colours", path.string(), image->bits, image->colors);
+  const cv::Mat rgb(image->height, image->width, CV_16UC(image->colors), image->data);
+  cv::Mat out;
+  if (image->colors == 1) {
+    out = rgb.clone();
+  } else {
+    out.create(rgb.size(), CV_16UC3);
+    const int from_to[] = {0, 2, 1, 1, 2, 0};
+    cv::mixChannels(&rgb, 1, &out, 1, from_to, 3);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string to_string(RawDemosaic demosaic) { return demosaic == RawDemosaic::half ? "half" : "full"; }
+
+RawDemosaic parse_raw_demosaic(const std::string& word, const std::string& what) {
+  if (word == "half") return RawDemosaic::half;
+  if (word == "full") return RawDemosaic::full;
+  fail("{}: '{}' is not a demosaic (half or full)", what, word);
+}
+
+bool is_raw_file(const std::filesystem::path& path) {
+  const std::string extension = lower_extension(path);
+  return std::find(std::begin(kRawExtensions), std::end(kRawExtensions), extension) !=
+         std::end(kRawExtensions);
+}
+
+nlohmann::json RawImage::describe() const {
+  return {{"camera", camera},
+          {"mosaic", mosaic},
+          {"demosaic", demosaic},
+          {"black_level", {black[0], black[1], black[2], black[3]}},
+          {"white_level", white}};
+}
+
+cv::Size read_raw_size(const std::filesystem::path& path, RawDemosaic demosaic) {
+  int data_error = -1;
+  const RawHandle raw = open_raw(path, &data_error);
+  const auto& sizes = raw->imgdata.sizes;
+  const bool binned = demosaic == RawDemosaic::half && !bayer_pattern(*raw).empty();
+  return binned ? cv::Size(sizes.width / 2, sizes.height / 2) : cv::Size(sizes.width, sizes.height);
+}
+
+RawImage read_raw(const std::filesystem::path& path, RawDemosaic demosaic) {
+  int data_error = -1;
+  const RawHandle raw = open_raw(path, &data_error);
+  const auto& idata = raw->imgdata.idata;
+  if (idata.raw_count > 1 || idata.is_foveon)
+    fail(
+        "{}: a multi-frame or Foveon RAW file; only single-frame mosaic, monochrome and linear files are "
+        "read",
+        path.string());
+  int rc = raw->unpack();
+  if (rc != LIBRAW_SUCCESS) fail("{}: cannot decode the RAW data ({})", path.string(), libraw_strerror(rc));
+  if (data_error >= 0) fail("{}: corrupt RAW data (at byte {})", path.string(), data_error);
+
+  RawImage out;
+  out.camera = fmt::format("{} {}", idata.make, idata.model);
+  const auto& colour = raw->imgdata.color;
+  const BlackLevels black = black_levels(path, colour);
+  for (int c = 0; c < 4; ++c) out.black[static_cast<std::size_t>(c)] = colour.black + colour.cblack[c];
+  out.white = colour.maximum;
+  const auto& rawdata = raw->imgdata.rawdata;
+  const std::string bayer = rawdata.raw_image != nullptr ? bayer_pattern(*raw) : std::string();
+  if (!bayer.empty()) {
+    // Each site's own level, pattern included: R, the first G, B, the second G.
+    bool first_green = true;
+    for (int site = 0; site < 4; ++site) {
+      const int r = site / 2, c = site % 2;
+      const char letter = idata.cdesc[raw->COLOR(r, c)];
+      const std::size_t slot = letter == 'R' ? 0 : letter == 'B' ? 2 : first_green ? 1 : 3;
+      if (letter == 'G') first_green = false;
+      out.black[slot] = black.at(r, c, raw->COLOR(r, c));
+    }
+  }
+  const double darkest = *std::max_element(out.black.begin(), out.black.end());
+  if (!(out.white > darkest))
+    fail("{}: white level {} is not above the black level {}", path.string(), out.white, darkest);
+
+  if (!bayer.empty()) {
+    out.mosaic = bayer;
+    out.demosaic = to_string(demosaic);
+    out.image = demosaic == RawDemosaic::half ? bin_bayer(*raw, black, out.white) : demosaic_full(path, *raw);
+  } else if (rawdata.raw_image != nullptr && idata.filters == kXTrans) {
+    out.mosaic = "X-Trans";
+    out.demosaic = "full";
+    out.image = demosaic_full(path, *raw);
+  } else if (rawdata.raw_image != nullptr && idata.filters == 0 && idata.colors == 1) {
+    out.mosaic = "monochrome";
+    out.demosaic = "none";
+    out.image = monochrome(*raw, black, out.white);
+  } else if (rawdata.color3_image != nullptr || rawdata.color4_image != nullptr) {
+    out.mosaic = "linear";
+    out.demosaic = "none";
+    out.image = linear(*raw, black, out.white);
+  } else {
+    fail("{}: a RAW layout this reader does not take (colours '{}', filters {:#x}{})", path.string(),
+         idata.cdesc, idata.filters, rawdata.float_image != nullptr ? ", floating point" : "");
+  }
+  if (data_error >= 0) fail("{}: corrupt RAW data (at byte {})", path.string(), data_error);
+  return out;
+}
+
+}  // namespace lightstage::io

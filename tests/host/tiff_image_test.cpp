@@ -1,0 +1,201 @@
+#include "lightstage/host/io/tiff_image.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/host/io/image_io.hpp"
+#include "lightstage/testing/errors.hpp"
+#include "lightstage/testing/paths.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <tiffio.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <vector>
+
+namespace lightstage {
+namespace {
+
+using testing::error_of;
+using ::testing::HasSubstr;
+
+// How a test TIFF is laid out on disk.
+struct Written {
+  int bits = 16;
+  int format = SAMPLEFORMAT_UINT;
+  int photometric = PHOTOMETRIC_RGB;
+  int extra_samples = 0;  // an alpha channel after the colour samples
+  bool planar = false;
+  int tile = 0;  // tile side; 0 = strips
+  int compression = COMPRESSION_NONE;
+};
+
+// A test image of `channels` channels in file order (R, G, B) with distinct values.
+cv::Mat pattern(int rows, int cols, int channels, int depth) {
+  cv::Mat image(rows, cols, CV_MAKETYPE(depth, channels));
+  cv::randu(image, 0, depth == CV_8U ? 255 : depth == CV_16U ? 65535 : 4.0);
+  return image;
+}
+
+// Writes `rgb` (file order) with `alpha` appended when the layout has an extra sample.
+void write_tiff(const std::filesystem::path& path, const cv::Mat& rgb, const Written& w) {
+  TIFF* tiff = TIFFOpen(path.c_str(), "w");
+  ASSERT_NE(tiff, nullptr);
+  const int colour = rgb.channels();
+  const int samples = colour + w.extra_samples;
+  TIFFSetField(tiff, TIFFTAG_IMAGEWIDTH, static_cast<std::uint32_t>(rgb.cols));
+  TIFFSetField(tiff, TIFFTAG_IMAGELENGTH, static_cast<std::uint32_t>(rgb.rows));
+  TIFFSetField(tiff, TIFFTAG_BITSPERSAMPLE, static_cast<std::uint16_t>(w.bits));
+  TIFFSetField(tiff, TIFFTAG_SAMPLEFORMAT, static_cast<std::uint16_t>(w.format));
+  TIFFSetField(tiff, TIFFTAG_SAMPLESPERPIXEL, static_cast<std::uint16_t>(samples));
+  TIFFSetField(tiff, TIFFTAG_PHOTOMETRIC, static_cast<std::uint16_t>(w.photometric));
+  TIFFSetField(tiff, TIFFTAG_PLANARCONFIG,
+               static_cast<std::uint16_t>(w.planar ? PLANARCONFIG_SEPARATE : PLANARCONFIG_CONTIG));
+  TIFFSetField(tiff, TIFFTAG_COMPRESSION, static_cast<std::uint16_t>(w.compression));
+  if (w.extra_samples > 0) {
+    const std::uint16_t kinds[] = {EXTRASAMPLE_UNASSALPHA};
+    TIFFSetField(tiff, TIFFTAG_EXTRASAMPLES, static_cast<std::uint16_t>(1), kinds);
+  }
+  if (w.photometric == PHOTOMETRIC_PALETTE) {
+    std::vector<std::uint16_t> map(std::size_t{1} << w.bits, 0);
+    TIFFSetField(tiff, TIFFTAG_COLORMAP, map.data(), map.data(), map.data());
+  }
+  const std::size_t bytes = static_cast<std::size_t>(w.bits / 8);
+  // Sample s of pixel (y, x), alpha = a constant.
+  const auto sample = [&](int y, int x, int s, std::uint8_t* out) {
+    if (s < colour) {
+      std::memcpy(out, rgb.ptr<std::uint8_t>(y) + (static_cast<std::size_t>(x) * colour + s) * bytes, bytes);
+    } else {
+      std::memset(out, 0x7f, bytes);
+    }
+  };
+  const int planes = w.planar ? samples : 1;
+  const int per_pixel = w.planar ? 1 : samples;
+  if (w.tile > 0) {
+    TIFFSetField(tiff, TIFFTAG_TILEWIDTH, static_cast<std::uint32_t>(w.tile));
+    TIFFSetField(tiff, TIFFTAG_TILELENGTH, static_cast<std::uint32_t>(w.tile));
+    std::vector<std::uint8_t> tile(static_cast<std::size_t>(w.tile * w.tile * per_pixel) * bytes);
+    for (int plane = 0; plane < planes; ++plane)
+      for (int y0 = 0; y0 < rgb.rows; y0 += w.tile)
+        for (int x0 = 0; x0 < rgb.cols; x0 += w.tile) {
+          std::fill(tile.begin(), tile.end(), 0);
+          for (int r = 0; r < w.tile && y0 + r < rgb.rows; ++r)
+            for (int c = 0; c < w.tile && x0 + c < rgb.cols; ++c)
+              for (int s = 0; s < per_pixel; ++s)
+                sample(y0 + r, x0 + c, w.planar ? plane : s,
+                       tile.data() + (static_cast<std::size_t>(r * w.tile + c) * per_pixel + s) * bytes);
+          ASSERT_GE(TIFFWriteTile(tiff, tile.data(), static_cast<std::uint32_t>(x0),
+                                  static_cast<std::uint32_t>(y0), 0, static_cast<std::uint16_t>(plane)),
+                    0);
+        }
+  } else {
+    TIFFSetField(tiff, TIFFTAG_ROWSPERSTRIP, static_cast<std::uint32_t>(3));
+    std::vector<std::uint8_t> line(static_cast<std::size_t>(rgb.cols * per_pixel) * bytes);
+    for (int plane = 0; plane < planes; ++plane)
+      for (int y = 0; y < rgb.rows; ++y) {
+        for (int x = 0; x < rgb.cols; ++x)
+          for (int s = 0; s < per_pixel; ++s)
+            sample(y, x, w.planar ? plane : s,
+                   line.data() + (static_cast<std::size_t>(x) * per_pixel + s) * bytes);
+        ASSERT_EQ(TIFFWriteScanline(tiff, line.data(), static_cast<std::uint32_t>(y),
+                                    static_cast<std::uint16_t>(plane)),
+                  1);
+      }
+  }
+  TIFFClose(tiff);
+}
+
+cv::Mat bgr(const cv::Mat& rgb) {
+  if (rgb.channels() == 1) return rgb;
+  cv::Mat out;
+  const int from_to[] = {0, 2, 1, 1, 2, 0};
+  out.create(rgb.size(), rgb.type());
+  cv::mixChannels(&rgb, 1, &out, 1, from_to, 3);
+  return out;
+}
+
+struct Case {
+  const char* name;
+  int channels, depth;
+  Written layout;
+};
+
+TEST(HostTiffImage, ReadsEveryLayoutItTakesAsStored) {
+  const auto dir = testing::scratch_dir();
+  const Case cases[] = {
+      {"rgb16-strips", 3, CV_16U, {}},
+      {"grey16", 1, CV_16U, {.photometric = PHOTOMETRIC_MINISBLACK}},
+      {"rgb8-alpha", 3, CV_8U, {.bits = 8, .extra_samples = 1}},
+      {"grey-float",
+       1,
+       CV_32F,
+       {.bits = 32, .format = SAMPLEFORMAT_IEEEFP, .photometric = PHOTOMETRIC_MINISBLACK}},
+      {"rgb16-planar", 3, CV_16U, {.planar = true}},
+      {"rgb16-tiled", 3, CV_16U, {.tile = 16}},
+      {"rgb16-planar-tiled-alpha", 3, CV_16U, {.extra_samples = 1, .planar = true, .tile = 16}},
+      {"rgb16-deflate", 3, CV_16U, {.compression = COMPRESSION_ADOBE_DEFLATE}},
+      {"rgb16-lzw", 3, CV_16U, {.compression = COMPRESSION_LZW}},
+  };
+  for (const Case& c : cases) {
+    const cv::Mat rgb = pattern(37, 29, c.channels, c.depth);  // sides not a multiple of the tile
+    const auto path = dir / (std::string(c.name) + ".tif");
+    write_tiff(path, rgb, c.layout);
+    const cv::Mat back = io::read_tiff(path);
+    ASSERT_EQ(back.type(), rgb.type()) << c.name;
+    EXPECT_EQ(cv::norm(back, bgr(rgb), cv::NORM_INF), 0) << c.name;
+    EXPECT_EQ(io::read_tiff_size(path), rgb.size()) << c.name;
+    // read_image dispatches on the name.
+    EXPECT_EQ(cv::norm(io::read_image(path), bgr(rgb), cv::NORM_INF), 0) << c.name;
+  }
+}
+
+TEST(HostTiffImage, RefusesWhatIsNotALinearCaptureNamingTheReason) {
+  const auto dir = testing::scratch_dir();
+  const struct {
+    const char* name;
+    int channels, depth;
+    Written layout;
+    const char* reason;
+  } cases[] = {
+      {"palette", 1, CV_8U, {.bits = 8, .photometric = PHOTOMETRIC_PALETTE}, "palette"},
+      {"white", 1, CV_16U, {.photometric = PHOTOMETRIC_MINISWHITE}, "min-is-white"},
+      {"signed", 1, CV_16U, {.format = SAMPLEFORMAT_INT, .photometric = PHOTOMETRIC_MINISBLACK}, "signed"},
+      {"cfa", 1, CV_16U, {.photometric = PHOTOMETRIC_CFA}, "mosaic"},
+  };
+  for (const auto& c : cases) {
+    const auto path = dir / (std::string(c.name) + ".tif");
+    write_tiff(path, pattern(8, 8, c.channels, c.depth), c.layout);
+    const std::string error = error_of([&] { io::read_tiff(path); });
+    EXPECT_THAT(error, HasSubstr(path.string())) << c.name;
+    EXPECT_THAT(error, HasSubstr(c.reason)) << c.name;
+  }
+}
+
+TEST(HostTiffImage, RefusesBrokenFilesAndNonFiniteFloats) {
+  const auto dir = testing::scratch_dir();
+  EXPECT_THAT(error_of([&] { io::read_tiff(dir / "absent.tif"); }), HasSubstr("no such file"));
+
+  const auto junk = dir / "junk.tif";
+  std::ofstream(junk) << "this is not a TIFF file at all";
+  EXPECT_THAT(error_of([&] { io::read_tiff(junk); }), HasSubstr("not a readable TIFF"));
+
+  // A whole file cut short: the directory reads, the pixels do not.
+  const auto whole = dir / "whole.tif";
+  write_tiff(whole, pattern(64, 64, 3, CV_16U), {});
+  std::ifstream in(whole, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto cut = dir / "cut.tif";
+  // libtiff writes the directory after the pixels: keep it, lose pixel bytes before it.
+  std::ofstream(cut, std::ios::binary) << bytes.substr(0, 8) << std::string(100, '\0');
+  EXPECT_THAT(error_of([&] { io::read_tiff(cut); }), HasSubstr(cut.string()));
+
+  cv::Mat floats = pattern(8, 8, 1, CV_32F);
+  floats.at<float>(3, 4) = std::numeric_limits<float>::quiet_NaN();
+  const auto nan = dir / "nan.tif";
+  write_tiff(nan, floats, {.bits = 32, .format = SAMPLEFORMAT_IEEEFP, .photometric = PHOTOMETRIC_MINISBLACK});
+  EXPECT_THAT(error_of([&] { io::read_tiff(nan); }), HasSubstr("NaN"));
+}
+
+}  // namespace
+}  // namespace lightstage
