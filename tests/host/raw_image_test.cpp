@@ -218,6 +218,14 @@ TEST(HostRawImage, ExifOfTheShotComesBack) {
   EXPECT_EQ(exif.to_json()["iso"], 200);
   EXPECT_EQ(io::read_raw(path).camera, "Lightstage Simulated DSLR");
 
+  // Text fields are ASCII by the specification, not always in the file: what
+  // reaches a manifest (JSON) is printable ASCII.
+  shot.make = "Cam\x97ra\x01";
+  sim::write_dng(path, shot);
+  EXPECT_EQ(io::read_exif(path).make, "Cam?ra?");
+  EXPECT_NO_THROW((void)io::read_exif(path).to_json().dump());
+  EXPECT_EQ(io::read_raw(path).camera.substr(0, 6), "Cam?ra");
+
   // A PNG has no EXIF: empty, not an error.
   const auto png = dir / "plain.png";
   io::write_png(png, cv::Mat(4, 4, CV_16UC1, cv::Scalar(5)));

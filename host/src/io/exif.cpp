@@ -1,5 +1,6 @@
 #include "lightstage/host/io/exif.hpp"
 
+#include "io/ascii_text.hpp"
 #include "lightstage/common/error.hpp"
 
 #include <exiv2/exiv2.hpp>
@@ -46,10 +47,7 @@ std::optional<double> positive_number(const Exiv2::ExifData& exif, const char* k
 std::string text(const Exiv2::ExifData& exif, const char* key) {
   const Exiv2::Exifdatum* datum = find(exif, key);
   if (datum == nullptr) return {};
-  std::string value = datum->toString();
-  while (!value.empty() && (value.back() == '\0' || std::isspace(static_cast<unsigned char>(value.back()))))
-    value.pop_back();
-  return value;
+  return ascii_text(datum->toString());
 }
 
 // "YYYY:MM:DD HH:MM:SS" (+ sub-seconds) as "YYYY-MM-DDTHH:MM:SS[.fff]".

@@ -1,5 +1,6 @@
 #include "lightstage/host/io/raw_image.hpp"
 
+#include "io/ascii_text.hpp"
 #include "io/file_extension.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/stack_io.hpp"
@@ -265,7 +266,7 @@ RawImage read_raw(const std::filesystem::path& path, RawDemosaic demosaic) {
   if (data_error >= 0) fail("{}: corrupt RAW data (at byte {})", path.string(), data_error);
 
   RawImage out;
-  out.camera = fmt::format("{} {}", idata.make, idata.model);
+  out.camera = ascii_text(fmt::format("{} {}", idata.make, idata.model));
   const auto& colour = raw->imgdata.color;
   const BlackLevels black = black_levels(path, colour);
   for (int c = 0; c < 4; ++c) out.black[static_cast<std::size_t>(c)] = colour.black + colour.cblack[c];
