@@ -5,12 +5,14 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/exif.hpp"
 #include "lightstage/host/io/image_io.hpp"
+#include "lightstage/host/io/stack_io.hpp"
 #include "lightstage/sim/dng_writer.hpp"
 #include "lightstage/sim/sensor.hpp"
 #include "lightstage/testing/errors.hpp"
 #include "lightstage/testing/paths.hpp"
 
 #include <gmock/gmock.h>
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -230,6 +232,27 @@ TEST(HostRawImage, ExifOfTheShotComesBack) {
   const auto png = dir / "plain.png";
   io::write_png(png, cv::Mat(4, 4, CV_16UC1, cv::Scalar(5)));
   EXPECT_TRUE(io::read_exif(png).empty());
+}
+
+TEST(HostRawImage, AStackFolderMayListRawFilesDirectly) {
+  const auto dir = testing::scratch_dir();
+  std::ofstream names(dir / "filenames.txt"), lights(dir / "light_directions.txt");
+  for (int i = 0; i < 3; ++i) {
+    sim::DngShot shot;
+    shot.mosaic = cv::Mat(24, 32, CV_16UC1, cv::Scalar(1000 + 1000 * i));
+    shot.white_level = 16383;
+    const std::string name = fmt::format("IMG_{}.dng", i);
+    sim::write_dng(dir / name, shot);
+    names << name << "\n";
+    lights << "0 0.1 " << 1 + i << "\n";
+  }
+  names.close();
+  lights.close();
+  const ImageStack stack = io::load_stack(dir);
+  ASSERT_EQ(stack.frames.size(), 3u);
+  EXPECT_EQ(stack.frames[2].image.type(), CV_16UC3);
+  EXPECT_EQ(stack.frames[2].image.size(), cv::Size(16, 12));
+  EXPECT_NEAR(cv::mean(stack.frames[2].image)[1], 3000.0 / 16383 * 65535, 1);
 }
 
 TEST(HostRawImage, BrokenFilesAreRefusedNamingTheFile) {
