@@ -19,12 +19,12 @@ if(NOT LIGHTSTAGE_CONTROLLER_ONLY)
   find_package(OpenEXR 3.1 CONFIG REQUIRED)
   # Camera files: RAW through LibRaw (its thread-safe libraw_r), TIFF and DNG
   # through libtiff, EXIF through exiv2.
-  find_package(TIFF 4.1 REQUIRED)
+  find_package(TIFF 4.5 REQUIRED)
   pkg_check_modules(LIBRAW REQUIRED IMPORTED_TARGET libraw_r>=0.20)
   # Its pkg-config file adds -I.../libraw and -fopenmp to every compile of the
   # library that links it; <libraw/libraw.h> needs neither.
   set_target_properties(PkgConfig::LIBRAW PROPERTIES INTERFACE_INCLUDE_DIRECTORIES "" INTERFACE_COMPILE_OPTIONS "")
-  pkg_check_modules(EXIV2 REQUIRED IMPORTED_TARGET exiv2>=0.27)
+  pkg_check_modules(EXIV2 REQUIRED IMPORTED_TARGET exiv2>=0.27.4)
 endif()
 
 # Optional hardware backends: AUTO builds what is found.

@@ -180,15 +180,46 @@ TEST(HostTiffImage, RefusesBrokenFilesAndNonFiniteFloats) {
   std::ofstream(junk) << "this is not a TIFF file at all";
   EXPECT_THAT(error_of([&] { io::read_tiff(junk); }), HasSubstr("not a readable TIFF"));
 
-  // A whole file cut short: the directory reads, the pixels do not.
-  const auto whole = dir / "whole.tif";
-  write_tiff(whole, pattern(64, 64, 3, CV_16U), {});
-  std::ifstream in(whole, std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const auto cut = dir / "cut.tif";
-  // libtiff writes the directory after the pixels: keep it, lose pixel bytes before it.
-  std::ofstream(cut, std::ios::binary) << bytes.substr(0, 8) << std::string(100, '\0');
-  EXPECT_THAT(error_of([&] { io::read_tiff(cut); }), HasSubstr(cut.string()));
+  // The directory reads, the pixels do not: a deflate strip overwritten.
+  const auto broken = dir / "broken.tif";
+  write_tiff(broken, pattern(64, 64, 3, CV_16U), {.compression = COMPRESSION_ADOBE_DEFLATE});
+  std::uint64_t offset = 0;
+  {
+    TIFF* tiff = TIFFOpen(broken.c_str(), "r");
+    ASSERT_NE(tiff, nullptr);
+    std::uint64_t* offsets = nullptr;
+    ASSERT_EQ(TIFFGetField(tiff, TIFFTAG_STRIPOFFSETS, &offsets), 1);
+    offset = offsets[0];
+    TIFFClose(tiff);
+  }
+  {
+    std::fstream file(broken, std::ios::in | std::ios::out | std::ios::binary);
+    file.seekp(static_cast<std::streamoff>(offset));
+    file << std::string(64, '\xff');
+  }
+  const std::string error = error_of([&] { io::read_tiff(broken); });
+  EXPECT_THAT(error, HasSubstr(broken.string()));
+  EXPECT_THAT(error, HasSubstr("cannot read row 0"));
+
+  // Tiles declared far larger than the image cost memory only: refused before allocating.
+  const auto huge_tiles = dir / "huge-tiles.tif";
+  {
+    TIFF* tiff = TIFFOpen(huge_tiles.c_str(), "w");
+    ASSERT_NE(tiff, nullptr);
+    TIFFSetField(tiff, TIFFTAG_IMAGEWIDTH, 16u);
+    TIFFSetField(tiff, TIFFTAG_IMAGELENGTH, 16u);
+    TIFFSetField(tiff, TIFFTAG_BITSPERSAMPLE, static_cast<std::uint16_t>(16));
+    TIFFSetField(tiff, TIFFTAG_SAMPLESPERPIXEL, static_cast<std::uint16_t>(1));
+    TIFFSetField(tiff, TIFFTAG_PHOTOMETRIC, static_cast<std::uint16_t>(PHOTOMETRIC_MINISBLACK));
+    TIFFSetField(tiff, TIFFTAG_COMPRESSION, static_cast<std::uint16_t>(COMPRESSION_ADOBE_DEFLATE));
+    TIFFSetField(tiff, TIFFTAG_TILEWIDTH, 1024u);
+    TIFFSetField(tiff, TIFFTAG_TILELENGTH, 1024u);
+    std::vector<std::uint16_t> tile(1024u * 1024u, 1);
+    ASSERT_GE(TIFFWriteTile(tiff, tile.data(), 0, 0, 0, 0), 0);
+    TIFFClose(tiff);
+  }
+  EXPECT_THAT(error_of([&] { io::read_tiff(huge_tiles); }),
+              HasSubstr("tiles of 1024x1024 do not fit a 16x16 image"));
 
   cv::Mat floats = pattern(8, 8, 1, CV_32F);
   floats.at<float>(3, 4) = std::numeric_limits<float>::quiet_NaN();

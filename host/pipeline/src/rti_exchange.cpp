@@ -11,6 +11,7 @@
 #include "lightstage/host/io/rti_import.hpp"
 #include "lightstage/host/io/solve_output.hpp"
 #include "lightstage/host/io/stack_io.hpp"
+#include "lightstage/host/io/tiff_image.hpp"
 #include "lightstage/host/radiometry.hpp"
 #include "lightstage/host/reflectance/relight.hpp"
 #include "lightstage/host/reflectance/rti_basis.hpp"
@@ -295,7 +296,17 @@ nlohmann::json import_rti(const ImportSettings& s) {
       extra["raw"] = decoded.describe();
       ++raw_files;
     } else {
-      photo = io::read_image(file);
+      // JPEG and PNG through OpenCV, which turns them upright by their EXIF
+      // orientation; TIFF as stored (io/tiff_image.hpp).
+      if (io::is_tiff_file(file)) {
+        photo = io::read_image(file);
+      } else {
+        photo = cv::imread(file.string(), cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
+        if (photo.empty()) fail("{}: not an image OpenCV can read (JPEG, PNG)", file.string());
+        if (photo.channels() == 4) cv::cvtColor(photo, photo, cv::COLOR_BGRA2BGR);
+      }
+      if (photo.channels() != 1 && photo.channels() != 3)
+        fail("{}: channels: {} (1 or 3 expected)", file.string(), photo.channels());
       (photo.depth() == CV_8U ? eight_bit : sixteen_bit) += 1;
     }
     Frame frame;

@@ -19,7 +19,7 @@ void initialise_exiv2() {
   static std::once_flag once;
   std::call_once(once, [] {
     Exiv2::LogMsg::setLevel(Exiv2::LogMsg::mute);  // failures reach the caller as InputError
-    Exiv2::XmpParser::initialize();                // once, before threads read files
+    Exiv2::XmpParser::initialize();                // XMP needs it once; read_exif runs one file at a time
     Exiv2::enableBMFF(true);                       // CR3
   });
 }

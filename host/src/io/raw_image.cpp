@@ -7,11 +7,13 @@
 
 #include <fmt/format.h>
 #include <libraw/libraw.h>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <new>
 #include <string_view>
 #include <system_error>
 
@@ -48,7 +50,8 @@ RawHandle open_raw(const std::filesystem::path& path, int* data_error) {
   if (rc != LIBRAW_SUCCESS)
     fail("{}: not a RAW file LibRaw can read ({})", path.string(), libraw_strerror(rc));
   const auto& sizes = raw->imgdata.sizes;
-  if (sizes.width < 2 || sizes.height < 2 || sizes.width > kMaxSensorSide || sizes.height > kMaxSensorSide)
+  if (sizes.width < 2 || sizes.height < 2 || sizes.width > kMaxSensorSide || sizes.height > kMaxSensorSide ||
+      sizes.raw_width > kMaxSensorSide || sizes.raw_height > kMaxSensorSide)
     fail("{}: RAW image of {}x{} pixels (each side 2 to {})", path.string(), sizes.width, sizes.height,
          kMaxSensorSide);
   return raw;
@@ -80,7 +83,7 @@ struct BlackLevels {
 
   double at(int row, int col, int colour) const {
     const auto& c = *colour_data;
-    double black = c.black + c.cblack[std::clamp(colour, 0, 3)];
+    double black = static_cast<double>(c.black) + c.cblack[std::clamp(colour, 0, 3)];
     if (pattern_rows > 0 && pattern_cols > 0)
       black += c.cblack[6 + (static_cast<unsigned>(row) % pattern_rows) * pattern_cols +
                         static_cast<unsigned>(col) % pattern_cols];
@@ -93,9 +96,41 @@ BlackLevels black_levels(const std::filesystem::path& path, const libraw_colorda
   levels.colour_data = &colour;
   levels.pattern_rows = colour.cblack[4];
   levels.pattern_cols = colour.cblack[5];
-  if (levels.pattern_rows * levels.pattern_cols > 4096)
+  if (levels.pattern_rows > 64 || levels.pattern_cols > 64 ||
+      levels.pattern_rows * levels.pattern_cols > 4096)
     fail("{}: black level pattern of {}x{} sites", path.string(), levels.pattern_rows, levels.pattern_cols);
   return levels;
+}
+
+// The highest black level any pixel can have: common + colour + pattern parts.
+double highest_black(const libraw_colordata_t& colour, const BlackLevels& levels) {
+  double highest = *std::max_element(colour.cblack, colour.cblack + 4);
+  double pattern = 0;
+  for (unsigned i = 0; i < levels.pattern_rows * levels.pattern_cols; ++i)
+    pattern = std::max(pattern, static_cast<double>(colour.cblack[6 + i]));
+  return static_cast<double>(colour.black) + highest + pattern;
+}
+
+// Whether the mosaic bins 2×2 as it lies in raw_image: a Bayer pattern on
+// square pixels, not rotated 45° (Fujifilm SuperCCD).
+bool binnable(LibRaw& raw) {
+  return !bayer_pattern(raw).empty() && !raw.is_fuji_rotated() && raw.imgdata.sizes.pixel_aspect == 1.0;
+}
+
+cv::Size output_size(LibRaw& raw, RawDemosaic demosaic) {
+  const auto& sizes = raw.imgdata.sizes;
+  return demosaic == RawDemosaic::half && binnable(raw) ? cv::Size(sizes.width / 2, sizes.height / 2)
+                                                        : cv::Size(sizes.width, sizes.height);
+}
+
+// The visible area and row pitch LibRaw reports must lie inside the buffer it decoded into.
+void check_geometry(const std::filesystem::path& path, const LibRaw& raw, int values_per_pixel) {
+  const auto& s = raw.imgdata.sizes;
+  if (s.left_margin + s.width > s.raw_width || s.top_margin + s.height > s.raw_height ||
+      static_cast<std::size_t>(s.raw_pitch) <
+          static_cast<std::size_t>(s.raw_width) * values_per_pixel * sizeof(std::uint16_t))
+    fail("{}: inconsistent RAW geometry (visible {}x{} at {},{} of {}x{}, pitch {} bytes)", path.string(),
+         s.width, s.height, s.left_margin, s.top_margin, s.raw_width, s.raw_height, s.raw_pitch);
 }
 
 // One site's value on the output scale: 65535 at or above white, else at most 65534.
@@ -185,6 +220,20 @@ cv::Mat linear(LibRaw& raw, const BlackLevels& black, double white) {
   return out;
 }
 
+// Interpolation spreads a clipped site into its neighbours without clipping
+// them: every output pixel within 2 sites of one reads 65535 (saturated).
+void mark_clipped_neighbourhoods(LibRaw& raw, double white, cv::Mat& image) {
+  const auto& sizes = raw.imgdata.sizes;
+  if (raw.imgdata.rawdata.raw_image == nullptr || image.size() != cv::Size(sizes.width, sizes.height)) return;
+  const RawPixels pixels(raw);
+  cv::Mat clipped(image.size(), CV_8UC1, cv::Scalar::all(0));
+  for (int y = 0; y < clipped.rows; ++y)
+    for (int x = 0; x < clipped.cols; ++x)
+      if (pixels.at(y, x) >= white) clipped.at<std::uint8_t>(y, x) = 255;
+  cv::dilate(clipped, clipped, cv::Mat::ones(5, 5, CV_8UC1));
+  image.setTo(cv::Scalar::all(kFullScale), clipped);
+}
+
 // LibRaw's own demosaic with nothing but black subtraction and scaling to white.
 cv::Mat demosaic_full(const std::filesystem::path& path, LibRaw& raw) {
   auto& params = raw.imgdata.params;
@@ -247,12 +296,12 @@ nlohmann::json RawImage::describe() const {
 cv::Size read_raw_size(const std::filesystem::path& path, RawDemosaic demosaic) {
   int data_error = -1;
   const RawHandle raw = open_raw(path, &data_error);
-  const auto& sizes = raw->imgdata.sizes;
-  const bool binned = demosaic == RawDemosaic::half && !bayer_pattern(*raw).empty();
-  return binned ? cv::Size(sizes.width / 2, sizes.height / 2) : cv::Size(sizes.width, sizes.height);
+  return output_size(*raw, demosaic);
 }
 
-RawImage read_raw(const std::filesystem::path& path, RawDemosaic demosaic) {
+namespace {
+
+RawImage decode(const std::filesystem::path& path, RawDemosaic demosaic) {
   int data_error = -1;
   const RawHandle raw = open_raw(path, &data_error);
   const auto& idata = raw->imgdata.idata;
@@ -261,17 +310,26 @@ RawImage read_raw(const std::filesystem::path& path, RawDemosaic demosaic) {
         "{}: a multi-frame or Foveon RAW file; only single-frame mosaic, monochrome and linear files are "
         "read",
         path.string());
+  const cv::Size size = output_size(*raw, demosaic);
+  if (size.width > kMaxImageSide || size.height > kMaxImageSide)
+    fail("{}: decodes to {}x{}, larger than the {}x{} a stack may hold", path.string(), size.width,
+         size.height, kMaxImageSide, kMaxImageSide);
   int rc = raw->unpack();
   if (rc != LIBRAW_SUCCESS) fail("{}: cannot decode the RAW data ({})", path.string(), libraw_strerror(rc));
   if (data_error >= 0) fail("{}: corrupt RAW data (at byte {})", path.string(), data_error);
+  if (raw->is_sraw())
+    fail("{}: an sRAW/mRAW file (white-balanced and resampled by the camera); shoot full-size RAW",
+         path.string());
 
   RawImage out;
   out.camera = ascii_text(fmt::format("{} {}", idata.make, idata.model));
   const auto& colour = raw->imgdata.color;
   const BlackLevels black = black_levels(path, colour);
-  for (int c = 0; c < 4; ++c) out.black[static_cast<std::size_t>(c)] = colour.black + colour.cblack[c];
+  for (int c = 0; c < 4; ++c)
+    out.black[static_cast<std::size_t>(c)] = static_cast<double>(colour.black) + colour.cblack[c];
   out.white = colour.maximum;
   const auto& rawdata = raw->imgdata.rawdata;
+  const bool bin = rawdata.raw_image != nullptr && demosaic == RawDemosaic::half && binnable(*raw);
   const std::string bayer = rawdata.raw_image != nullptr ? bayer_pattern(*raw) : std::string();
   if (!bayer.empty()) {
     // Each site's own level, pattern included: R, the first G, B, the second G.
@@ -284,32 +342,52 @@ RawImage read_raw(const std::filesystem::path& path, RawDemosaic demosaic) {
       out.black[slot] = black.at(r, c, raw->COLOR(r, c));
     }
   }
-  const double darkest = *std::max_element(out.black.begin(), out.black.end());
+  const double darkest = highest_black(colour, black);
   if (!(out.white > darkest))
     fail("{}: white level {} is not above the black level {}", path.string(), out.white, darkest);
 
-  if (!bayer.empty()) {
+  if (bin) {
+    check_geometry(path, *raw, 1);
     out.mosaic = bayer;
-    out.demosaic = to_string(demosaic);
-    out.image = demosaic == RawDemosaic::half ? bin_bayer(*raw, black, out.white) : demosaic_full(path, *raw);
-  } else if (rawdata.raw_image != nullptr && idata.filters == kXTrans) {
-    out.mosaic = "X-Trans";
+    out.demosaic = "half";
+    out.image = bin_bayer(*raw, black, out.white);
+  } else if (rawdata.raw_image != nullptr && (!bayer.empty() || idata.filters == kXTrans)) {
+    check_geometry(path, *raw, 1);
+    out.mosaic = bayer.empty() ? "X-Trans" : bayer;
     out.demosaic = "full";
     out.image = demosaic_full(path, *raw);
+    mark_clipped_neighbourhoods(*raw, out.white, out.image);
   } else if (rawdata.raw_image != nullptr && idata.filters == 0 && idata.colors == 1) {
+    check_geometry(path, *raw, 1);
     out.mosaic = "monochrome";
     out.demosaic = "none";
     out.image = monochrome(*raw, black, out.white);
   } else if (rawdata.color3_image != nullptr || rawdata.color4_image != nullptr) {
+    check_geometry(path, *raw, rawdata.color4_image != nullptr ? 4 : 3);
     out.mosaic = "linear";
     out.demosaic = "none";
     out.image = linear(*raw, black, out.white);
   } else {
     fail("{}: a RAW layout this reader does not take (colours '{}', filters {:#x}{})", path.string(),
-         idata.cdesc, idata.filters, rawdata.float_image != nullptr ? ", floating point" : "");
+         ascii_text(idata.cdesc), idata.filters, rawdata.float_image != nullptr ? ", floating point" : "");
   }
+  if (out.image.size() != size)
+    fail("{}: decoded to {}x{} where its header gives {}x{}", path.string(), out.image.cols, out.image.rows,
+         size.width, size.height);
   if (data_error >= 0) fail("{}: corrupt RAW data (at byte {})", path.string(), data_error);
   return out;
+}
+
+}  // namespace
+
+RawImage read_raw(const std::filesystem::path& path, RawDemosaic demosaic) {
+  try {
+    return decode(path, demosaic);
+  } catch (const std::bad_alloc&) {
+    fail("{}: too large to decode in the memory available", path.string());
+  } catch (const cv::Exception& e) {
+    fail("{}: cannot decode ({})", path.string(), e.what());
+  }
 }
 
 }  // namespace lightstage::io

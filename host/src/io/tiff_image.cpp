@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <new>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -182,8 +183,13 @@ void read_tiles(const TiffFile& file, const Layout& layout, cv::Mat& out) {
   const tmsize_t size = TIFFTileSize(file.get());
   const std::size_t needed = static_cast<std::size_t>(tile_width) * static_cast<std::size_t>(tile_height) *
                              (layout.planar ? 1 : layout.samples) * layout.bytes;
-  if (tile_width <= 0 || tile_height <= 0 || size <= 0 || static_cast<std::size_t>(size) < needed)
-    file.fail_here("tile size does not fit the image");
+  // A tile larger than the image (rounded up to libtiff's multiple of 16) only costs memory.
+  const auto round_up = [](int side) { return (side + 15) / 16 * 16; };
+  if (tile_width <= 0 || tile_height <= 0 || tile_width > round_up(layout.width) ||
+      tile_height > round_up(layout.height) || size <= 0 || static_cast<std::size_t>(size) < needed ||
+      size > kMaxTiffAllocation)
+    file.fail_here(fmt::format("tiles of {}x{} do not fit a {}x{} image", tile_width, tile_height,
+                               layout.width, layout.height));
   std::vector<std::uint8_t> tile(static_cast<std::size_t>(size));
   const std::size_t tile_row = needed / static_cast<std::size_t>(tile_height);
   const int planes = layout.planar ? std::min(layout.samples, layout.channels) : 1;
@@ -213,16 +219,22 @@ bool is_tiff_file(const std::filesystem::path& path) {
 }
 
 cv::Mat read_tiff(const std::filesystem::path& path) {
-  const TiffFile file(path);
-  const Layout layout = layout_of(file);
-  cv::Mat out(layout.height, layout.width, CV_MAKETYPE(layout.cv_depth, layout.channels));
-  if (TIFFIsTiled(file.get()))
-    read_tiles(file, layout, out);
-  else
-    read_strips(file, layout, out);
-  if (layout.cv_depth == CV_32F && !cv::checkRange(out))
-    fail("{}: float samples hold NaN or infinity", path.string());
-  return out;
+  try {
+    const TiffFile file(path);
+    const Layout layout = layout_of(file);
+    cv::Mat out(layout.height, layout.width, CV_MAKETYPE(layout.cv_depth, layout.channels));
+    if (TIFFIsTiled(file.get()))
+      read_tiles(file, layout, out);
+    else
+      read_strips(file, layout, out);
+    if (layout.cv_depth == CV_32F && !cv::checkRange(out))
+      fail("{}: float samples hold NaN or infinity", path.string());
+    return out;
+  } catch (const std::bad_alloc&) {
+    fail("{}: too large to decode in the memory available", path.string());
+  } catch (const cv::Exception& e) {
+    fail("{}: cannot decode ({})", path.string(), e.what());
+  }
 }
 
 cv::Size read_tiff_size(const std::filesystem::path& path) { return size_of(TiffFile(path)); }

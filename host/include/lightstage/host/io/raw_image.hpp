@@ -17,8 +17,9 @@
 //   width and height.
 // - full: LibRaw's demosaic at full size, with unit white balance multipliers
 //   and the camera's raw colour space (still linear, but each value mixes
-//   neighbouring sites). Mosaics that are not 2×2 (Fujifilm X-Trans) are
-//   always demosaiced so.
+//   neighbouring sites; a pixel within two sites of a clipped one reads 65535).
+//   Mosaics that do not bin (X-Trans, SuperCCD, non-square pixels) are always
+//   demosaiced so.
 // Monochrome sensors and linear (already demosaiced) DNGs keep their full size.
 
 #include <nlohmann/json.hpp>
@@ -53,8 +54,9 @@ struct RawImage {
 
 // Decodes `path` as above. Throws InputError naming the file when it is
 // missing, not a RAW file LibRaw knows, truncated or corrupt, of a layout this
-// reader does not take (floating-point or multi-frame raws), or declares a
-// white level not above its black level.
+// reader does not take (floating-point, multi-frame, sRAW), decodes to more
+// than kMaxImageSide (stack_io.hpp) on a side, or declares a white level not
+// above its black level.
 RawImage read_raw(const std::filesystem::path& path, RawDemosaic demosaic = RawDemosaic::half);
 
 // The size read_raw gives, from the file's metadata without decoding the pixels.

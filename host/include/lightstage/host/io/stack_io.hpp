@@ -3,7 +3,7 @@
 // file and every manifest key is described in docs/stack-format.md.
 //
 //   filenames.txt          image order, one file name per line (required)
-//   <images>               8/16-bit PNG (grey or RGB) or float PFM, same size and type
+//   <images>               8/16-bit PNG (grey or RGB), float PFM, TIFF or camera RAW, same size and type
 //   light_directions.txt   "x y z" per image, object -> light (required)
 //   light_intensities.txt  "r g b" per image (optional: all 1)
 //   mask.png               object where the mask equals its maximum (optional: all pixels)
@@ -49,7 +49,7 @@ struct LoadOptions {
 // intensity files with the wrong number of lines or malformed numbers, a
 // zero-length direction, a non-positive intensity, a mask, ground truth,
 // dark frame or manifest that does not fit the images, more than
-// kMaxStackImages images or one listed twice, an image that is not PNG or PFM
+// kMaxStackImages images or one listed twice, an image that is not PNG, PFM, TIFF or camera RAW
 // or declares a side over kMaxImageSide (both checked from the headers before
 // decoding), a float image holding NaN or infinity. Dark frames named by
 // the manifest are read once each and shared by the frames naming them.
