@@ -129,7 +129,8 @@ TEST_F(HostHostileStack, OtherFormatsAreRefusedWhateverTheirName) {
   std::vector<unsigned char> jpeg;
   ASSERT_TRUE(cv::imencode(".jpg", cv::Mat(6, 9, CV_8UC3, cv::Scalar::all(90)), jpeg));
   write("img_01.png", std::string(jpeg.begin(), jpeg.end()));
-  EXPECT_THAT(load_error(), HasSubstr("img_01.png: not a readable image (stack images are PNG or PFM)"));
+  EXPECT_THAT(load_error(),
+              HasSubstr("img_01.png: not a readable image (stack images are PNG, PFM, TIFF or camera RAW)"));
 }
 
 TEST_F(HostHostileStack, HugeWrongTypedManifestValueIsCutInTheMessage) {
