@@ -11,7 +11,8 @@ case "$flavour" in
   # -g1 (line tables and function names) is what backtraces and perf need; full
   # debug information costs a quarter of the build time, and 40 % under the sanitizers.
   release)  dir=$root/build;          args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG") ;;
-  # -O1: sanitizers are meant to run optimised a little; Eigen at -O0 is too slow for the solver tests.
+  # -O1: sanitizers are meant to run optimised a little; Eigen at -O0 is too slow for the solver tests
+  # (the tests' own code and the CLI's flag binding compile at -O0: tests/CMakeLists.txt).
   # Shared libraries: every test then also runs the LIGHTSTAGE_SHARED_LIBS build.
   sanitize) dir=$root/build-sanitize; args=(-DCMAKE_BUILD_TYPE=Debug "-DCMAKE_CXX_FLAGS_DEBUG=-O1 -g1" -DLIGHTSTAGE_SANITIZE=ON
                                           -DLIGHTSTAGE_BUILD_BENCHMARKS=OFF -DLIGHTSTAGE_SHARED_LIBS=ON) ;;
