@@ -11,8 +11,8 @@
 #include "lightstage/testing/errors.hpp"
 #include "lightstage/testing/paths.hpp"
 
-#include <gmock/gmock.h>
 #include <fmt/format.h>
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
