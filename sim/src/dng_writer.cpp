@@ -1,6 +1,7 @@
 #include "lightstage/sim/dng_writer.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/temporary_path.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -8,7 +9,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdarg>
@@ -91,14 +91,6 @@ void check_shot(const std::filesystem::path& path, const DngShot& shot) {
 }
 
 // --- Files ---------------------------------------------------------------------------
-
-// A fresh name beside `target`: "dir/.shot.dng.tmp-<pid>-<n>.dng".
-std::filesystem::path temporary_sibling(const std::filesystem::path& target) {
-  static std::atomic<unsigned> counter{0};
-  const auto name = fmt::format(".{}.tmp-{}-{}{}", target.filename().string(), ::getpid(), counter++,
-                                target.extension().string());
-  return target.parent_path() / name;
-}
 
 // Removes the temporary file (once created) on every path out unless the
 // rename happened.

@@ -111,16 +111,16 @@ double highest_black(const libraw_colordata_t& colour, const BlackLevels& levels
   return static_cast<double>(colour.black) + highest + pattern;
 }
 
-// Whether the mosaic bins 2×2 as it lies in raw_image: a Bayer pattern on
-// square pixels, not rotated 45° (Fujifilm SuperCCD).
-bool binnable(LibRaw& raw) {
-  return !bayer_pattern(raw).empty() && !raw.is_fuji_rotated() && raw.imgdata.sizes.pixel_aspect == 1.0;
+// Whether `demosaic` bins this file 2×2 as it lies in raw_image: half size
+// asked for, a Bayer pattern on square pixels, not rotated 45° (Fujifilm SuperCCD).
+bool bins(LibRaw& raw, RawDemosaic demosaic) {
+  return demosaic == RawDemosaic::half && !bayer_pattern(raw).empty() && !raw.is_fuji_rotated() &&
+         raw.imgdata.sizes.pixel_aspect == 1.0;
 }
 
-cv::Size output_size(LibRaw& raw, RawDemosaic demosaic) {
+cv::Size output_size(const LibRaw& raw, bool binned) {
   const auto& sizes = raw.imgdata.sizes;
-  return demosaic == RawDemosaic::half && binnable(raw) ? cv::Size(sizes.width / 2, sizes.height / 2)
-                                                        : cv::Size(sizes.width, sizes.height);
+  return binned ? cv::Size(sizes.width / 2, sizes.height / 2) : cv::Size(sizes.width, sizes.height);
 }
 
 // The visible area and row pitch LibRaw reports must lie inside the buffer it decoded into.
@@ -296,7 +296,7 @@ nlohmann::json RawImage::describe() const {
 cv::Size read_raw_size(const std::filesystem::path& path, RawDemosaic demosaic) {
   int data_error = -1;
   const RawHandle raw = open_raw(path, &data_error);
-  return output_size(*raw, demosaic);
+  return output_size(*raw, bins(*raw, demosaic));
 }
 
 namespace {
@@ -310,7 +310,8 @@ RawImage decode(const std::filesystem::path& path, RawDemosaic demosaic) {
         "{}: a multi-frame or Foveon RAW file; only single-frame mosaic, monochrome and linear files are "
         "read",
         path.string());
-  const cv::Size size = output_size(*raw, demosaic);
+  const bool binned = bins(*raw, demosaic);
+  const cv::Size size = output_size(*raw, binned);
   if (size.width > kMaxImageSide || size.height > kMaxImageSide)
     fail("{}: decodes to {}x{}, larger than the {}x{} a stack may hold", path.string(), size.width,
          size.height, kMaxImageSide, kMaxImageSide);
@@ -329,7 +330,7 @@ RawImage decode(const std::filesystem::path& path, RawDemosaic demosaic) {
     out.black[static_cast<std::size_t>(c)] = static_cast<double>(colour.black) + colour.cblack[c];
   out.white = colour.maximum;
   const auto& rawdata = raw->imgdata.rawdata;
-  const bool bin = rawdata.raw_image != nullptr && demosaic == RawDemosaic::half && binnable(*raw);
+  const bool bin = binned && rawdata.raw_image != nullptr;
   const std::string bayer = rawdata.raw_image != nullptr ? bayer_pattern(*raw) : std::string();
   if (!bayer.empty()) {
     // Each site's own level, pattern included: R, the first G, B, the second G.

@@ -170,7 +170,7 @@ void write_ply(const std::filesystem::path& path, const Mesh& mesh) {
     put(out, static_cast<std::uint8_t>(3));
     for (const std::int32_t i : t) put(out, i);
   }
-  const auto tmp = util::temporary_sibling(path);
+  const auto tmp = temporary_sibling(path);
   {
     std::ofstream file(tmp, std::ios::binary | std::ios::trunc);
     file.write(out.data(), static_cast<std::streamsize>(out.size()));

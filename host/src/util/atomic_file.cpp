@@ -6,7 +6,6 @@
 #include <fcntl.h>
 #include <unistd.h>
 
-#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <mutex>
@@ -33,13 +32,6 @@ int injected_errno(const std::filesystem::path& target) {
 }
 
 }  // namespace
-
-std::filesystem::path temporary_sibling(const std::filesystem::path& target) {
-  static std::atomic<unsigned> counter{0};
-  const auto name = fmt::format(".{}.tmp-{}-{}{}", target.filename().string(), getpid(), counter++,
-                                target.extension().string());
-  return target.parent_path() / name;
-}
 
 void commit_temporary(const std::filesystem::path& temporary, const std::filesystem::path& target) {
   std::error_code error;

@@ -3,15 +3,15 @@
 // name in the same folder (same extension, so format-by-extension writers such
 // as cv::imwrite still work), then rename over the target.
 
+#include "lightstage/common/temporary_path.hpp"
+
 #include <filesystem>
 #include <string>
 #include <string_view>
 
 namespace lightstage::util {
 
-// A fresh, unused name beside `target` ending in target's extension,
-// e.g. "dir/.normal.png.tmp-1234-7.png".
-std::filesystem::path temporary_sibling(const std::filesystem::path& target);
+// Temporary names: lightstage::temporary_sibling (common/temporary_path.hpp).
 
 // Renames `temporary` to `target`; on failure removes `temporary` and throws
 // InputError naming `target`.
