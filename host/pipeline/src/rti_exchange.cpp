@@ -4,7 +4,6 @@
 #include "lightstage/common/log.hpp"
 #include "lightstage/host/calibration/lp_file.hpp"
 #include "lightstage/host/io/exif.hpp"
-#include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/output_folder.hpp"
 #include "lightstage/host/io/relight_web.hpp"
 #include "lightstage/host/io/rti_files.hpp"
@@ -256,6 +255,24 @@ std::string format_holdout_table(const nlohmann::json& r) {
 
 namespace {
 
+// One photograph as decoded: RAW through io/raw_image.hpp (its decode noted in
+// `extra`), TIFF as stored (io/tiff_image.hpp), JPEG and PNG through OpenCV,
+// which turns them upright by their EXIF orientation.
+cv::Mat read_photo(const std::filesystem::path& file, io::RawDemosaic demosaic, nlohmann::json& extra) {
+  if (io::is_raw_file(file)) {
+    io::RawImage decoded = io::read_raw(file, demosaic);
+    extra["raw"] = decoded.describe();
+    return std::move(decoded.image);
+  }
+  if (io::is_tiff_file(file)) return io::read_tiff(file);
+  cv::Mat photo = cv::imread(file.string(), cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
+  if (photo.empty()) fail("{}: not an image OpenCV can read (JPEG, PNG)", file.string());
+  if (photo.channels() == 4) cv::cvtColor(photo, photo, cv::COLOR_BGRA2BGR);
+  if (photo.channels() != 1 && photo.channels() != 3)
+    fail("{}: channels: {} (1 or 3 expected)", file.string(), photo.channels());
+  return photo;
+}
+
 std::filesystem::path find_lp(const ImportSettings& s) {
   if (!s.lp.empty()) return s.lp;
   std::vector<std::filesystem::path> found;
@@ -289,26 +306,11 @@ nlohmann::json import_rti(const ImportSettings& s) {
     if (!std::filesystem::is_regular_file(file))
       fail("{}: image: {} is not in {}", where, name, s.input.string());
     nlohmann::json extra = {{"source_image", name}};
-    cv::Mat photo;
-    if (io::is_raw_file(file)) {
-      io::RawImage decoded = io::read_raw(file, s.raw_demosaic);
-      photo = std::move(decoded.image);
-      extra["raw"] = decoded.describe();
+    const cv::Mat photo = read_photo(file, s.raw_demosaic, extra);
+    if (extra.contains("raw"))
       ++raw_files;
-    } else {
-      // JPEG and PNG through OpenCV, which turns them upright by their EXIF
-      // orientation; TIFF as stored (io/tiff_image.hpp).
-      if (io::is_tiff_file(file)) {
-        photo = io::read_image(file);
-      } else {
-        photo = cv::imread(file.string(), cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
-        if (photo.empty()) fail("{}: not an image OpenCV can read (JPEG, PNG)", file.string());
-        if (photo.channels() == 4) cv::cvtColor(photo, photo, cv::COLOR_BGRA2BGR);
-      }
-      if (photo.channels() != 1 && photo.channels() != 3)
-        fail("{}: channels: {} (1 or 3 expected)", file.string(), photo.channels());
+    else
       (photo.depth() == CV_8U ? eight_bit : sixteen_bit) += 1;
-    }
     Frame frame;
     try {
       const io::ExifInfo exif = io::read_exif(file);
