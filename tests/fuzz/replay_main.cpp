@@ -90,10 +90,6 @@ Bytes mutate(const Bytes& input, const Bytes& other, std::mt19937_64& random) {
   return out;
 }
 
-bool starts_with(std::string_view text, std::string_view prefix) {
-  return text.substr(0, prefix.size()) == prefix;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -103,11 +99,11 @@ int main(int argc, char** argv) {
   std::vector<std::filesystem::path> files;
   for (int i = 1; i < argc; ++i) {
     const std::string_view arg = argv[i];
-    if (starts_with(arg, "--mutants=")) {
+    if (arg.starts_with("--mutants=")) {
       mutants = std::atoi(argv[i] + 10);
-    } else if (starts_with(arg, "--seed=")) {
+    } else if (arg.starts_with("--seed=")) {
       seed = std::strtoull(argv[i] + 7, nullptr, 10);
-    } else if (starts_with(arg, "--last-input=")) {
+    } else if (arg.starts_with("--last-input=")) {
       last_input = argv[i] + 13;
     } else if (std::filesystem::is_directory(arg)) {
       for (const auto& entry : std::filesystem::recursive_directory_iterator(arg))
