@@ -1,7 +1,7 @@
 # Build switches. Hardware backends default to AUTO: built when the library is
 # found, skipped (with a message) when not, so a machine without any of them builds.
 set(LIGHTSTAGE_BACKEND_CHOICES AUTO ON OFF)
-foreach(backend GPIOD LIBCAMERA LIBUSB V4L2)
+foreach(backend GPIOD LIBCAMERA LIBUSB V4L2 GPHOTO2 ARAVIS)
   set(LIGHTSTAGE_WITH_${backend} AUTO CACHE STRING "Build the ${backend} backend (AUTO, ON, OFF)")
   set_property(CACHE LIGHTSTAGE_WITH_${backend} PROPERTY STRINGS ${LIGHTSTAGE_BACKEND_CHOICES})
 endforeach()

@@ -101,7 +101,8 @@ set(devel_depends libeigen3-dev libyaml-cpp-dev libfmt-dev libspdlog-dev libprot
 foreach(component ${LIGHTSTAGE_OPENCV_COMPONENTS})
   list(APPEND devel_depends libopencv-${component}-dev)
 endforeach()
-foreach(pair "GPIOD;libgpiod-dev" "LIBCAMERA;libcamera-dev" "LIBUSB;libusb-1.0-0-dev")
+foreach(pair "GPIOD;libgpiod-dev" "LIBCAMERA;libcamera-dev" "ARAVIS;libaravis-dev" "GPHOTO2;libgphoto2-dev"
+        "LIBUSB;libusb-1.0-0-dev")
   list(GET pair 0 backend)
   list(GET pair 1 package)
   if(LIGHTSTAGE_HAVE_${backend})

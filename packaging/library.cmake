@@ -68,7 +68,7 @@ set(pc_requires eigen3 fmt spdlog yaml-cpp protobuf zlib)
 if(LIGHTSTAGE_CONFIG_HOST)
   list(APPEND pc_requires nlohmann_json OpenEXR libtiff-4 "libraw_r >= 0.20" "exiv2 >= 0.27.4")
 endif()
-foreach(backend GPIOD LIBCAMERA LIBUSB)
+foreach(backend GPIOD LIBCAMERA ARAVIS GPHOTO2 LIBUSB)
   if(LIGHTSTAGE_HAVE_${backend})
     string(REPLACE ">=" " >= " module "${LIGHTSTAGE_${backend}_MODULE}")  # pkg-config's spelling
     list(APPEND pc_requires ${module})

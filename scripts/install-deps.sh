@@ -24,6 +24,7 @@ packages=(
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libgpiod-dev libusb-1.0-0-dev libcamera-dev
+  libgphoto2-dev libaravis-dev  # DSLRs over USB and GenICam cameras (host only: not in cross_packages)
   libprotobuf-dev protobuf-compiler zlib1g-dev
   pybind11-dev python3-dev python3-numpy  # the Python module (host/python) and its test
   chromium  # the report viewer's headless-browser test (tests/report)

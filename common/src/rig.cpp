@@ -20,8 +20,9 @@ using Field = YamlField;
 
 // A duration in microseconds: positive and at most kMaxRigDurationUs, so that
 // the firmware's nanosecond clocks (int64) cannot overflow whatever the file says.
-double duration_us(const Field& f) {
-  const double value = f.positive();
+// `may_be_zero`: for a delay that a rig may not have at all (a lag, a lead).
+double duration_us(const Field& f, bool may_be_zero = false) {
+  const double value = may_be_zero ? f.non_negative() : f.positive();
   if (value > kMaxRigDurationUs) {
     f.error(
         fmt::format("must be at most {:.0f} us (one hour), got {}", kMaxRigDurationUs, printable(f.text())));
@@ -140,6 +141,8 @@ void check_rig(const Rig& rig, const Field& root) {
     if (!fresh) where.error(line.describe() + " is already used by " + it->second);
   };
   claim(rig.trigger.line, "the camera trigger", root["trigger"]);
+  if (rig.trigger.focus)
+    claim(rig.trigger.focus->line, "the camera's focus (half-press)", root["trigger"]["focus"]);
   if (rig.strobe) claim(rig.strobe->line, "the strobe input", root["strobe"]);
   for (std::size_t i = 0; i < rig.chains.size(); ++i) {
     const auto& c = rig.chains[i];
@@ -200,10 +203,23 @@ Rig parse_document(const Field& root, const std::string& source) {
   rig.camera = parse_camera(root["camera"]);
 
   const Field trigger = root["trigger"];
-  trigger.only_keys({"line", "active_low", "pulse_us"});
+  trigger.only_keys({"line", "active_low", "pulse_us", "focus", "shutter_lag_us", "arrival_timeout_us"});
   rig.trigger.line = parse_line(trigger["line"]);
   if (trigger.has("active_low")) rig.trigger.line.active_low = trigger["active_low"].boolean();
   if (trigger.has("pulse_us")) rig.trigger.pulse_us = duration_us(trigger["pulse_us"]);
+  if (trigger.has("focus")) {
+    const Field focus = trigger["focus"];
+    focus.only_keys({"line", "active_low", "lead_us"});
+    FocusLine f;
+    f.line = parse_line(focus["line"]);
+    if (focus.has("active_low")) f.line.active_low = focus["active_low"].boolean();
+    if (focus.has("lead_us")) f.lead_us = duration_us(focus["lead_us"], true);
+    rig.trigger.focus = f;
+  }
+  if (trigger.has("shutter_lag_us"))
+    rig.trigger.shutter_lag_us = duration_us(trigger["shutter_lag_us"], true);
+  if (trigger.has("arrival_timeout_us"))
+    rig.trigger.arrival_timeout_us = duration_us(trigger["arrival_timeout_us"], true);
 
   if (root.has("strobe")) {
     const Field strobe = root["strobe"];

@@ -73,7 +73,7 @@ class SequenceRun {
     event_.set_planned_start_ns(plan_ns_);
     const std::vector<int> ids = Sequencer::lit_leds(step);
     for (const int id : ids) event_.add_led_ids(static_cast<std::uint32_t>(id));
-    const std::int64_t settle_ns = us_to_ns(step.settle_us());
+    const std::int64_t settle_ns = us_to_ns(sequencer_.settle_us(step));
 
     // Staged ahead (a chain shifts now), so that the deadline costs one latch.
     if (!ids.empty()) {
@@ -108,6 +108,7 @@ class SequenceRun {
       late(lit_ns, plan_ns_);
       notify_leds();
     }
+    if (step.trigger()) trigger_.focus_at(lit_ns);  // half-press for the whole lead
 
     // Settle, then trigger: never sooner than settle_us after the LEDs came on.
     const std::int64_t trigger_plan_ns = plan_ns_ + settle_ns;
@@ -142,7 +143,9 @@ class SequenceRun {
       if (wake != Wake::kStrobeFall) return end_interrupted(wake);
       off_plan_ns = event_.strobe_fall_ns();
     } else {
-      const std::int64_t exposure_ns = us_to_ns(step.exposure_us());
+      // A stills camera starts exposing up to its shutter lag after the trigger.
+      const std::int64_t exposure_ns =
+          us_to_ns(step.exposure_us() + (step.trigger() ? rig_.trigger.shutter_lag_us : 0.0));
       off_plan_ns = trigger_plan_ns + exposure_ns;
       if (const Wake wake = wait_until(std::max(off_plan_ns, exposure_start_ns + exposure_ns), false);
           wake != Wake::kDeadline) {
@@ -334,9 +337,14 @@ std::vector<int> Sequencer::lit_leds(const proto::Step& step) {
   return ids;
 }
 
+double Sequencer::settle_us(const proto::Step& step) const {
+  return step.trigger() ? rig_.trigger.lead_us(step.settle_us()) : step.settle_us();
+}
+
 double Sequencer::worst_case_on_us(const proto::Step& step) const {
-  return static_cast<double>(step.settle_us()) +
-         (step.wait_strobe() ? strobe_timeout_us(rig_, step) : static_cast<double>(step.exposure_us()));
+  if (step.wait_strobe()) return settle_us(step) + strobe_timeout_us(rig_, step);
+  return settle_us(step) + static_cast<double>(step.exposure_us()) +
+         (step.trigger() ? rig_.trigger.shutter_lag_us : 0.0);
 }
 
 std::optional<Refusal> Sequencer::check(const proto::Sequence& sequence) const {

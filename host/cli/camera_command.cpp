@@ -4,6 +4,7 @@
 
 #include "lightstage/common/rig.hpp"
 #include "lightstage/host/capture/capture_session.hpp"
+#include "lightstage/host/capture/file_camera.hpp"
 #include "lightstage/host/capture/response_curve.hpp"
 #include "lightstage/host/controller/controller_client.hpp"
 #include "lightstage/hw/cameras.hpp"
@@ -47,6 +48,7 @@ std::vector<cv::Mat> take_bracket(BracketArgs& args, std::vector<double>& exposu
   if (exposures.empty()) exposures = default_bracket(rig.camera.exposure_us);
   hw::register_hw_cameras();
   sim::register_sim_camera();
+  register_file_cameras();
   auto camera = camera::open_camera_uri(args.camera);
   auto controller = connect_controller(args.controller);
   const auto images = capture_bracket(rig, *controller, *camera, args.led, exposures, args.options);

@@ -37,7 +37,10 @@ void add_capture(CLI::App& app) {
       "--out scans/coin");
   sub->add_option("--rig", args->rig, "rig description (YAML)")->capture_default_str();
   sub->add_option("--controller", args->controller, "controller URI: tcp:, unix:, serial:, usb:")->required();
-  sub->add_option("--camera", args->camera, "camera URI: v4l2:/dev/videoN, libcamera:ID, sim:PATH")
+  sub->add_option(
+         "--camera", args->camera,
+         "camera URI: v4l2:/dev/videoN, libcamera:ID, aravis:ID, gphoto2:[MODEL|PORT], folder:PATH (a "
+         "tethering folder), sim:PATH")
       ->required();
   sub->add_option("--out", args->options.out, "stack folder to write")->required();
   sub->add_flag("--resume", args->options.resume,

@@ -48,6 +48,15 @@ void add_demo(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--dark-frames", args->demo.capture.dark_frames, "dark frames averaged per exposure")
       ->capture_default_str();
+  sub->add_option(
+         "--camera", args->demo.camera,
+         "sim: the simulator's machine-vision camera; dslr: a simulated DSLR fired through its remote "
+         "port, its RAW (DNG) files taken from a folder (default rig: sim-dome-dslr.yaml)")
+      ->check(CLI::IsMember({"sim", "dslr"}))
+      ->capture_default_str();
+  sub->add_option("--dslr-drop-rate", args->demo.dslr_drop_rate,
+                  "--camera dslr: the share of shots whose file never arrives (each is retaken)")
+      ->capture_default_str();
   sub->add_option("--programs", args->programs,
                   "folder holding lightstage-sim and lightstage-domed (default: this program's folder)");
   add_solve_flags(*sub, args->demo.solve);
@@ -56,6 +65,7 @@ void add_demo(CLI::App& app) {
     apply_output_flags(*sub, args->output);
     pipeline::DomeDemoOptions demo = args->demo;
     demo.rig = args->rig;
+    if (demo.camera == "dslr" && sub->count("--rig") == 0) demo.rig = rig_directory() / "sim-dome-dslr.yaml";
     demo.programs = args->programs;
     demo.capture.exposure_us = parse_exposure_us(args->exposure);
     demo.mode = args->output.mode();

@@ -8,11 +8,12 @@
 namespace lightstage::cli {
 
 void add_devices(CLI::App& app) {
-  CLI::App* sub = app.add_subcommand("devices",
-                                     "List the hardware this machine can see: GPIO chips, V4L2 and libcamera "
-                                     "cameras, USB devices, each with the URI to pass to other commands.\n"
-                                     "Nothing is opened for writing and no line is touched.\n"
-                                     "Example: lightstage devices");
+  CLI::App* sub = app.add_subcommand(
+      "devices",
+      "List the hardware this machine can see: GPIO chips, V4L2, libcamera, GenICam (aravis) and "
+      "gphoto2 cameras, USB devices, each with the URI to pass to other commands.\n"
+      "Nothing is opened for writing and no line is touched.\n"
+      "Example: lightstage devices");
   sub->callback([] {
     for (const auto& report : hw::probe_devices()) {
       fmt::print("{}:\n", report.scheme);

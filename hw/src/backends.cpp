@@ -14,6 +14,16 @@ std::vector<BackendInfo> hardware_backends() {
 #else
       {"libcamera", "cameras through libcamera", false},
 #endif
+#ifdef LIGHTSTAGE_HAVE_ARAVIS
+      {"aravis", "GenICam cameras (GigE Vision, USB3 Vision) through aravis", true},
+#else
+      {"aravis", "GenICam cameras (GigE Vision, USB3 Vision) through aravis", false},
+#endif
+#ifdef LIGHTSTAGE_HAVE_GPHOTO2
+      {"gphoto2", "DSLR and mirrorless cameras over USB through libgphoto2", true},
+#else
+      {"gphoto2", "DSLR and mirrorless cameras over USB through libgphoto2", false},
+#endif
 #ifdef LIGHTSTAGE_HAVE_LIBUSB
       {"usb", "the dome controller over USB (libusb)", true},
 #else

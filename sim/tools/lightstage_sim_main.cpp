@@ -2,14 +2,16 @@
 // serves a virtual gpiochip with the rig's lines to the firmware's `sim:`
 // backend, records every line change (the firmware's timestamps) and emulates
 // the camera's strobe; with --camera it also serves a virtual camera that
-// renders the scene lit by the LEDs on during each exposure. Runs until
-// SIGINT or SIGTERM. See docs/sim-gpio.md.
+// renders the scene lit by the LEDs on during each exposure, and with --dslr
+// a stills camera on the trigger (remote-release) line that writes a raw file
+// per shot into a folder. Runs until SIGINT or SIGTERM. See docs/sim-gpio.md.
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
 #include "lightstage/common/rig.hpp"
 #include "lightstage/common/socket_link.hpp"
 #include "lightstage/common/version.hpp"
 #include "lightstage/sim/camera/camera_service.hpp"
+#include "lightstage/sim/camera/dslr.hpp"
 #include "lightstage/sim/gpio/chip_layout.hpp"
 #include "lightstage/sim/gpio/fault.hpp"
 #include "lightstage/sim/gpio/gpio_service.hpp"
@@ -28,6 +30,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <optional>
+#include <utility>
 
 namespace {
 
@@ -49,7 +52,82 @@ struct Options {
   std::string noise = "physical";
   std::string response = "identity";
   std::vector<std::string> camera_faults;
+  // The DSLR on the remote-release port.
+  std::string dslr;
+  std::optional<double> dslr_exposure_us, dslr_iso;
+  std::string dslr_lag_ms = "40:120", dslr_card_delay_ms = "150:900";
+  std::vector<std::string> dslr_drops;
+  double dslr_drop_rate = 0;
+  double dslr_clock_offset_ms = 0;
+  std::string dslr_focus_line;
+  int dslr_buffer = lightstage::sim::DslrOptions{}.buffer_shots;
+  std::uint64_t dslr_seed = 1;
 };
+
+// "MIN:MAX" milliseconds, 0 <= MIN <= MAX, as nanoseconds.
+std::pair<std::int64_t, std::int64_t> ms_range(const std::string& flag, const std::string& text) {
+  const auto colon = text.find(':');
+  auto number = [&](const std::string& part) {
+    char* end = nullptr;
+    const double value = std::strtod(part.c_str(), &end);
+    if (part.empty() || end != part.c_str() + part.size() || !std::isfinite(value)) {
+      lightstage::fail("{} '{}': '{}' is not a number of milliseconds (expected MIN:MAX)", flag, text, part);
+    }
+    return value;
+  };
+  if (colon == std::string::npos) lightstage::fail("{} '{}': expected MIN:MAX in milliseconds", flag, text);
+  const double min = number(text.substr(0, colon)), max = number(text.substr(colon + 1));
+  if (min < 0) lightstage::fail("{} '{}': MIN {} is negative", flag, text, min);
+  if (min > max) lightstage::fail("{} '{}': MIN {} is above MAX {}", flag, text, min, max);
+  return {std::llround(min * 1e6), std::llround(max * 1e6)};
+}
+
+// The DSLR's options from its flags; the shutter is the rig's trigger line.
+lightstage::sim::DslrOptions dslr_options(const Options& options, const simgpio::ChipLayout& layout) {
+  lightstage::sim::DslrOptions o;
+  o.folder = options.dslr;
+  if (!layout.trigger) lightstage::fail("--dslr: the rig has no trigger line to fire the camera");
+  o.shutter_line = layout.display_name(*layout.trigger);
+  if (!options.dslr_focus_line.empty()) {
+    const auto offset = layout.resolve(options.dslr_focus_line);
+    if (!offset) {
+      lightstage::fail("--dslr-focus-line '{}': the virtual chip has no such line (a name or an offset)",
+                       options.dslr_focus_line);
+    }
+    if (offset == layout.trigger)
+      lightstage::fail("--dslr-focus-line '{}': that is the trigger (shutter) line", options.dslr_focus_line);
+    o.focus_line = layout.display_name(*offset);
+  }
+  if (options.dslr_exposure_us &&
+      !(*options.dslr_exposure_us > 0 && std::isfinite(*options.dslr_exposure_us)))
+    lightstage::fail("--dslr-exposure-us {}: must be positive", *options.dslr_exposure_us);
+  o.exposure_us = options.dslr_exposure_us;
+  if (options.dslr_iso && !(*options.dslr_iso > 0 && std::isfinite(*options.dslr_iso)))
+    lightstage::fail("--dslr-iso {}: must be positive", *options.dslr_iso);
+  o.iso = options.dslr_iso;
+  std::tie(o.lag_min_ns, o.lag_max_ns) = ms_range("--dslr-lag-ms", options.dslr_lag_ms);
+  std::tie(o.delay_min_ns, o.delay_max_ns) = ms_range("--dslr-card-delay-ms", options.dslr_card_delay_ms);
+  for (const auto& drop : options.dslr_drops) {
+    char* end = nullptr;
+    const unsigned long long n = std::strtoull(drop.c_str(), &end, 10);
+    if (drop.empty() || drop[0] == '-' || end != drop.c_str() + drop.size() || n == 0)
+      lightstage::fail("--dslr-drop '{}': expected shot numbers N >= 1 (counting from 1), comma-separated",
+                       drop);
+    o.drop_shots.insert(n);
+  }
+  if (!(options.dslr_drop_rate >= 0 && options.dslr_drop_rate < 1))
+    lightstage::fail("--dslr-drop-rate {}: must be in [0, 1)", options.dslr_drop_rate);
+  o.drop_rate = options.dslr_drop_rate;
+  if (!std::isfinite(options.dslr_clock_offset_ms))
+    lightstage::fail("--dslr-clock-offset-ms {}: must be a number of milliseconds",
+                     options.dslr_clock_offset_ms);
+  o.clock_offset_ns = std::llround(options.dslr_clock_offset_ms * 1e6);
+  if (options.dslr_buffer < 1) lightstage::fail("--dslr-buffer {}: must be at least 1", options.dslr_buffer);
+  o.buffer_shots = options.dslr_buffer;
+  o.seed = options.dslr_seed;
+  o.check();
+  return o;
+}
 
 // The world the virtual camera sees, and its sensor.
 lightstage::sim::SimulateOptions scene_options(Options options) {
@@ -90,10 +168,14 @@ int serve(const Options& options, const sigset_t& stop_signals) {
   const std::string uri = lightstage::bound_uri(*listener);
   host.add(std::move(listener), gpio);
   std::shared_ptr<lightstage::sim::CameraService> camera;
+  std::shared_ptr<lightstage::sim::SimulatedDslr> dslr;
   std::string camera_uri;
+  // The world both cameras see, rendered by whichever asks.
+  const bool renders = !options.camera.empty() || !options.dslr.empty();
+  const auto scene = renders ? scene_options(options) : options.scene;
+  std::shared_ptr<const lightstage::sim::World> world;
+  if (renders) world = std::make_shared<const lightstage::sim::World>(rig, scene);
   if (!options.camera.empty()) {
-    const auto scene = scene_options(options);
-    auto world = std::make_shared<const lightstage::sim::World>(rig, scene);
     lightstage::sim::CameraServiceOptions camera_options;
     if (chip->layout().trigger)
       camera_options.trigger_line = chip->layout().display_name(*chip->layout().trigger);
@@ -116,6 +198,13 @@ int serve(const Options& options, const sigset_t& stop_signals) {
     camera_uri = lightstage::bound_uri(*camera_listener);
     host.add(std::move(camera_listener), camera);
   }
+  // Beside the virtual camera, not instead of it: both only watch the trigger
+  // edges, and the `sim:` camera renders only while a client streams from it.
+  if (!options.dslr.empty()) {
+    dslr = std::make_shared<lightstage::sim::SimulatedDslr>(world, scene.sensor,
+                                                            dslr_options(options, chip->layout()));
+    chip->add_timeline_sink(dslr);
+  }
 
   auto log = lightstage::logger("sim");
   log->info("rig '{}': {} lines, {} LEDs, {} chain(s); strobe {}", rig.name, chip->layout().lines.size(),
@@ -124,7 +213,16 @@ int serve(const Options& options, const sigset_t& stop_signals) {
                 ? fmt::format("on (delay {} us, exposure {} us)", chip_opts.strobe_delay_ns / 1000.0,
                               chip_opts.strobe_exposure_ns / 1000.0)
                 : std::string("off"));
+  if (dslr) {
+    const auto black = dslr->black_levels();
+    log->info(
+        "dslr: shutter on {}, files {}... into {}; exposure {} us, ISO {}, black {}/{}/{}/{} DN, white {} DN",
+        chip->layout().display_name(*chip->layout().trigger),
+        lightstage::sim::SimulatedDslr::file_name(dslr->first_file_number()), options.dslr,
+        dslr->exposure_us(), dslr->iso(), black[0], black[1], black[2], black[3], dslr->white_level());
+  }
   if (camera) fmt::print("lightstage-sim: camera on {}\n", camera_uri);
+  if (dslr) fmt::print("lightstage-sim: dslr writes into {}\n", options.dslr);
   fmt::print("lightstage-sim: listening on {}\n", uri);
   std::fflush(stdout);
 
@@ -134,6 +232,14 @@ int serve(const Options& options, const sigset_t& stop_signals) {
   host.stop();
   const auto stats = chip->stats();
   if (camera) log->info("camera: {} frame(s) delivered", camera->frames_sent());
+  if (dslr) {
+    const auto s = dslr->stats();
+    log->info(
+        "dslr: {} press(es): {} shot(s) taken, {} on the card, {} lost, {} not written; ignored: {} busy, {} "
+        "buffer full, {} without focus",
+        s.presses, s.taken, s.written, s.dropped, s.failed, s.ignored_busy, s.ignored_buffer,
+        s.ignored_focus);
+  }
   log->info("served {} trigger(s): {} strobe(s), {} lost to faults, {} ignored during an exposure",
             stats.triggers, stats.strobes, stats.strobes_lost, stats.triggers_ignored);
   return 0;
@@ -174,10 +280,55 @@ int main(int argc, char** argv) {
   app.add_option("--response", options.response,
                  "camera: response curve: identity, gamma:2.2, srgb, s-curve:2")
       ->capture_default_str();
-  app.add_option("--black-level", options.scene.sensor.black_level, "camera: black level, DN");
+  app.add_option("--black-level", options.scene.sensor.black_level,
+                 "camera: black level, DN (dslr: 512 when 0)");
   app.add_option("--seed", options.scene.seed, "camera: noise seed")->capture_default_str();
   app.add_option("--camera-fault", options.camera_faults,
                  "camera: inject a fault (repeatable): drop-frame:N loses the N-th frame");
+  auto* dslr =
+      app.add_option("--dslr", options.dslr,
+                     "also fire a simulated DSLR on the trigger (remote-release) line, writing "
+                     "IMG_NNNN.DNG into DIR (created if missing; numbering continues after the files "
+                     "there)")
+          ->type_name("DIR");
+  app.add_option("--dslr-exposure-us", options.dslr_exposure_us,
+                 "dslr: exposure time (default: the rig camera's exposure_us)")
+      ->needs(dslr);
+  app.add_option("--dslr-iso", options.dslr_iso, "dslr: ISO, 100 x gain (default: 100 x the camera's gain)")
+      ->needs(dslr);
+  app.add_option("--dslr-lag-ms", options.dslr_lag_ms, "dslr: shutter lag MIN:MAX, drawn uniformly")
+      ->type_name("MIN:MAX")
+      ->capture_default_str()
+      ->needs(dslr);
+  app.add_option("--dslr-card-delay-ms", options.dslr_card_delay_ms,
+                 "dslr: end of exposure to file on the card MIN:MAX, drawn uniformly (files stay in order)")
+      ->type_name("MIN:MAX")
+      ->capture_default_str()
+      ->needs(dslr);
+  app.add_option("--dslr-drop", options.dslr_drops,
+                 "dslr: shots whose file is lost, N[,N...] counting from 1 (repeatable)")
+      ->type_name("N[,N...]")
+      ->delimiter(',')
+      ->needs(dslr);
+  app.add_option("--dslr-drop-rate", options.dslr_drop_rate,
+                 "dslr: chance in [0, 1) that a shot's file is lost")
+      ->capture_default_str()
+      ->needs(dslr);
+  app.add_option("--dslr-clock-offset-ms", options.dslr_clock_offset_ms,
+                 "dslr: the camera clock's error, added to the EXIF time")
+      ->capture_default_str()
+      ->needs(dslr);
+  app.add_option("--dslr-focus-line", options.dslr_focus_line,
+                 "dslr: the half-press line (name or offset); the camera then ignores a shutter without it")
+      ->type_name("NAME")
+      ->needs(dslr);
+  app.add_option("--dslr-buffer", options.dslr_buffer,
+                 "dslr: shots exposed but not yet on the card at most; a press beyond is ignored")
+      ->capture_default_str()
+      ->needs(dslr);
+  app.add_option("--dslr-seed", options.dslr_seed, "dslr: seed of the lag, delay, drop and noise draws")
+      ->capture_default_str()
+      ->needs(dslr);
   app.add_flag("--version", version, "print the version");
   CLI11_PARSE(app, argc, argv);
   if (version) {

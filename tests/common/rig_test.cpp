@@ -121,6 +121,33 @@ TEST(Rig, ErrorsNameFileLineAndField) {
   expect_rig_error("- just\n- a list\n", {"broken.yaml", "mapping"});
 }
 
+TEST(Rig, AStillsCameraTriggerHasAHalfPressLineALagAndAnArrivalTimeout) {
+  const std::string dslr = replace(
+      kMinimalRig, "trigger: {line: 10}",
+      "trigger: {line: 10, pulse_us: 80000, focus: {line: {line: 11, active_low: true}, lead_us: 250000},\n"
+      "          shutter_lag_us: 120000, arrival_timeout_us: 15000000}");
+  const Rig rig = parse_rig(dslr, "dslr.yaml");
+  ASSERT_TRUE(rig.trigger.focus);
+  EXPECT_EQ(rig.trigger.focus->line.offset, 11);
+  EXPECT_TRUE(rig.trigger.focus->line.active_low);
+  EXPECT_DOUBLE_EQ(rig.trigger.focus->lead_us, 250000);
+  EXPECT_DOUBLE_EQ(rig.trigger.pulse_us, 80000);
+  EXPECT_DOUBLE_EQ(rig.trigger.shutter_lag_us, 120000);
+  EXPECT_DOUBLE_EQ(rig.trigger.arrival_timeout_us, 15000000);
+  // None of it by default: a machine-vision camera's trigger.
+  const Rig plain = parse_rig(kMinimalRig, "tiny.yaml");
+  EXPECT_FALSE(plain.trigger.focus);
+  EXPECT_EQ(plain.trigger.shutter_lag_us, 0);
+  EXPECT_EQ(plain.trigger.arrival_timeout_us, 0);
+
+  expect_rig_error(replace(dslr, "{line: 11, active_low: true}", "1"),
+                   {"leds[1].line", "line 1 is already used by the camera's focus (half-press)"});
+  expect_rig_error(replace(dslr, "shutter_lag_us: 120000", "shutter_lag_us: -5"), {"trigger.shutter_lag_us"});
+  expect_rig_error(replace(dslr, "lead_us: 250000", "lead: 250000"), {"trigger.focus", "lead"});
+  expect_rig_error(replace(dslr, "arrival_timeout_us: 15000000", "arrival_timeout_us: 1e12"),
+                   {"trigger.arrival_timeout_us", "one hour"});
+}
+
 TEST(Rig, ChainBitsAreCheckedAgainstTheChain) {
   const std::string chained = replace(kMinimalRig, "leds:\n",
                                       "chains:\n"

@@ -25,8 +25,9 @@ constexpr std::int64_t kUs = 1000;
 
 // The direct rig on a fake chip with a camera on the trigger, run on a virtual clock.
 struct Bench {
-  explicit Bench(testing::FakeCamera camera = {kTrigger, kStrobe, 50 * kUs, 500 * kUs, false})
-      : rig(testing::direct_rig()), chip(FakeChip::with_lines(16, clock)), safety(rig) {
+  explicit Bench(testing::FakeCamera camera = {kTrigger, kStrobe, 50 * kUs, 500 * kUs, false},
+                 Rig bench_rig = testing::direct_rig())
+      : rig(std::move(bench_rig)), chip(FakeChip::with_lines(16, clock)), safety(rig) {
     chip->set_camera(camera);
     io = open_dome_io(rig, *chip, clock);
     sequencer = std::make_unique<Sequencer>(rig, *io.leds, *io.trigger, io.strobe.get(), safety, clock);
@@ -329,6 +330,39 @@ TEST(Sequencer, AGpioFailureEndsTheSequenceWithoutThrowing) {
   EXPECT_NO_THROW(done = bench.run(testing::one_led_per_step(14, {0, 1, 2}, {})));
   EXPECT_EQ(done.outcome(), proto::GPIO_ERROR);
   EXPECT_THAT(done.detail(), HasSubstr("injected failure"));
+}
+
+constexpr unsigned kFocus = 10;
+
+TEST(Sequencer, AStillsCameraGetsItsHalfPressLeadAndTheLedCoversItsShutterLag) {
+  Bench bench({kTrigger, 11, 0, 0, true}, testing::dslr_rig());
+  const proto::Sequence sequence = testing::one_led_per_step(
+      1, {0, 1}, {.leds = {}, .settle_us = 500, .exposure_us = 10000, .gap_us = 1000});
+  ASSERT_FALSE(bench.sequencer->check(sequence));
+  const proto::SequenceDone done = bench.run(sequence, bench.clock.now_ns() + 1000 * kUs);
+  ASSERT_EQ(done.outcome(), proto::OK) << done.detail();
+  const auto shutter = bench.pulses(kTrigger), focus = bench.pulses(kFocus);
+  ASSERT_EQ(shutter.size(), 2u);
+  ASSERT_EQ(focus.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const proto::StepEvent& event = bench.events[i];
+    // Half-press with the LED, the shutter its lead later (longer than settle_us), both released together.
+    EXPECT_EQ(focus[i].first, event.leds_on_ns());
+    EXPECT_EQ(shutter[i].first - focus[i].first, 20000 * kUs);
+    EXPECT_EQ(shutter[i].second - shutter[i].first, 50000 * kUs);
+    EXPECT_EQ(focus[i].second, shutter[i].second);
+    // Lit through the lag and the exposure, whenever within the lag the camera starts.
+    EXPECT_EQ(event.leds_off_ns() - event.trigger_ns(), (30000 + 10000) * kUs);
+  }
+  EXPECT_LE(focus[0].second, focus[1].first);
+  EXPECT_TRUE(bench.all_dark());
+  EXPECT_EQ(bench.chip->value(kFocus), 0);
+  // The lead and the lag count against the LED's on-time: 20 + 30 + 10 ms over a 55 ms limit is refused.
+  Bench tight({kTrigger, 11, 0, 0, true}, testing::dslr_rig(55000));
+  const auto refusal = tight.sequencer->check(sequence);
+  ASSERT_TRUE(refusal);
+  EXPECT_EQ(refusal->code, proto::Error::SAFETY_LIMIT);
+  EXPECT_DOUBLE_EQ(tight.sequencer->worst_case_on_us(sequence.steps(0)), 20000 + 30000 + 10000);
 }
 
 }  // namespace

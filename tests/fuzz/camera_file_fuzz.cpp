@@ -59,8 +59,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         if (image.size() != declared) __builtin_trap();
         break;
       }
-      default:
-        (void)io::read_exif(path).to_json().dump();
+      default: {
+        const io::ExifInfo exif = io::read_exif(path);
+        (void)exif.to_json().dump();
+        // The time a stills camera's shot is matched by: a second's worth of steps at most.
+        if (const auto time = io::taken_time(exif);
+            time && (time->resolution_ns < 1 || time->resolution_ns > 1'000'000'000))
+          __builtin_trap();
+      }
     }
   } catch (const lightstage::InputError&) {
   }

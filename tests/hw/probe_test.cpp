@@ -1,6 +1,7 @@
 // The real backends are built here but this machine has no GPIO chip, camera
 // or USB bus: probing must report that cleanly, never crash or hang.
 #include "lightstage/hw/probe.hpp"
+#include "gphoto2_leaks.hpp"
 #include "lightstage/hw/backends.hpp"
 
 #include <gtest/gtest.h>
@@ -21,7 +22,7 @@ TEST(Probe, EveryBackendReportsDevicesOrAReason) {
       EXPECT_EQ(device.uri.rfind(report.scheme + ":", 0), 0u) << device.uri;
     }
   }
-  EXPECT_EQ(schemes, (std::set<std::string>{"gpiod", "v4l2", "libcamera", "usb"}));
+  EXPECT_EQ(schemes, (std::set<std::string>{"gpiod", "v4l2", "libcamera", "aravis", "gphoto2", "usb"}));
 }
 
 TEST(Probe, GpioChipsMatchTheDevFolder) {

@@ -15,6 +15,7 @@
 #include <cctype>
 #include <csignal>
 #include <fstream>
+#include <set>
 #include <thread>
 
 namespace lightstage::testing {
@@ -149,6 +150,87 @@ TEST(CaptureIntegration, KilledHostResumesToTheSameStack) {
     EXPECT_EQ(a.frames[i].filename, b.frames[i].filename);
     EXPECT_EQ(cv::norm(a.frames[i].image, b.frames[i].image, cv::NORM_INF), 0) << "frame " << i;
   }
+}
+
+// A DSLR on the remote port (lightstage-sim's simulated one: random shutter
+// lag and card delay, DNG files in a folder): every file filed under its own
+// LED, a lost file retaken, and a killed host resumed to the same stack.
+TEST(CaptureIntegration, DslrFilesFindTheirLedsAndAKilledHostResumes) {
+  const fs::path shots = scratch_dir() / "shots";
+  fs::create_directories(shots);
+  std::vector<std::string> sim_args = kScene;
+  for (const std::string& a : {std::string("--dslr"), shots.string(), std::string("--dslr-exposure-us"),
+                               std::string("4000"), std::string("--dslr-drop"), std::string("9")})
+    sim_args.push_back(a);
+  SimulatedDome dome({source_dir() / "hw/rigs/sim-dome-dslr.yaml", sim_args, {}, false});
+  const auto args = [&](const fs::path& out) {
+    std::vector<std::string> a = capture_args(dome, out);
+    a[6] = "folder:" + shots.string() + "?poll_ms=10";  // --camera
+    a.insert(a.end(), {"--leds", "0,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20,21,22,23", "--json"});
+    return a;
+  };
+  const auto whole = scratch_dir() / "whole";
+  const RunResult first = run_lightstage(args(whole));
+  ASSERT_EQ(first.exit_code, 0) << first.err << dome.logs();
+  EXPECT_GE(nlohmann::json::parse(first.out).at("retakes").get<int>(), 1) << "shot 9 never arrived";
+
+  const auto cut = scratch_dir() / "cut";
+  {
+    ChildProcess host(bin_dir() / "lightstage", args(cut), scratch_dir() / "host.log");
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (frames_on_disk(cut) < 8 && std::chrono::steady_clock::now() < deadline && host.running()) {
+      std::this_thread::sleep_for(milliseconds(5));
+    }
+    host.signal(SIGKILL);
+    host.wait(std::chrono::seconds(5));
+  }
+  const std::size_t kept = frames_on_disk(cut);
+  ASSERT_GE(kept, 8u);
+  ASSERT_LT(kept, 24u) << "the capture finished before it could be interrupted";
+  std::vector<std::string> resume = args(cut);
+  resume.push_back("--resume");
+  const RunResult resumed = run_lightstage(resume);
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err << dome.logs();
+
+  // Noise-free: a file filed under another LED would differ from the uninterrupted capture.
+  const ImageStack a = io::load_stack(whole), b = io::load_stack(cut);
+  ASSERT_EQ(a.frames.size(), 24u);
+  ASSERT_EQ(b.frames.size(), 24u);
+  for (std::size_t i = 0; i < a.frames.size(); ++i) {
+    EXPECT_EQ(b.frames[i].led_id, static_cast<int>(i));
+    EXPECT_EQ(a.frames[i].image.type(), CV_16UC3);
+    EXPECT_LE(cv::norm(a.frames[i].image, b.frames[i].image, cv::NORM_INF), 1) << "frame " << i;
+  }
+  // Each frame names its own original, which is still where it arrived.
+  std::ifstream manifest_file(cut / "manifest.json");
+  const auto manifest = nlohmann::json::parse(manifest_file);
+  std::set<std::string> originals;
+  for (const auto& frame : manifest.at("frames")) {
+    const std::string original = frame.at("source_image").get<std::string>();
+    EXPECT_TRUE(fs::exists(original)) << original;
+    originals.insert(original);
+  }
+  EXPECT_EQ(originals.size(), 24u);
+}
+
+// A DSLR whose dial is at another shutter speed than the capture asks: refused
+// naming both, not mixed into the stack.
+TEST(CaptureIntegration, ADslrSetToAnotherShutterSpeedIsRefusedNamingBoth) {
+  const fs::path shots = scratch_dir() / "shots";
+  fs::create_directories(shots);
+  std::vector<std::string> sim_args = kScene;
+  for (const std::string& a :
+       {std::string("--dslr"), shots.string(), std::string("--dslr-exposure-us"), std::string("16667")})
+    sim_args.push_back(a);
+  SimulatedDome dome({source_dir() / "hw/rigs/sim-dome-dslr.yaml", sim_args, {}, false});
+  std::vector<std::string> args = capture_args(dome, scratch_dir() / "capture");
+  args[6] = "folder:" + shots.string();  // --camera
+  args.insert(args.end(), {"--leds", "0,1"});
+  const RunResult capture = run_lightstage(args);
+  EXPECT_NE(capture.exit_code, 0);
+  EXPECT_NE(capture.err.find("was exposed 1/60 s but the capture asked 1/250 s"), std::string::npos)
+      << capture.err;
+  EXPECT_NE(capture.err.find("--resume"), std::string::npos) << capture.err;
 }
 
 TEST(CaptureIntegration, AVanishedControllerLeavesTheDomeDarkAndTheCaptureResumable) {

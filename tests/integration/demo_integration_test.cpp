@@ -85,6 +85,44 @@ TEST(DemoIntegration, CalibratesCapturesSolvesAndReportsThroughThreeProcesses) {
   EXPECT_TRUE(processes_mentioning(rig.string()).empty()) << "the dome's programs outlive the demo";
 }
 
+// `lightstage demo --camera dslr`: the same pipeline with lightstage-sim's DSLR
+// on the remote port (random shutter lag, card delays, lost files), its DNGs
+// taken from a folder, normals within 1.2x the sim: camera's error.
+TEST(DemoIntegration, ADslrOnTheRemotePortSolvesAsWellAsTheSimCamera) {
+  const fs::path dir = scratch_dir();
+  const auto demo = [&](const std::string& camera, const fs::path& rig) {
+    const RunResult run = run_lightstage({"demo", "--camera", camera, "--rig", rig.string(), "--scene",
+                                          "sphere", "--width", "128", "--height", "128", "--dslr-drop-rate",
+                                          "0.03", "--out", (dir / camera).string(), "--json"});
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    return run.exit_code == 0 ? nlohmann::json::parse(run.out) : nlohmann::json();
+  };
+  const auto sim = demo("sim", source_dir() / "hw/rigs/sim-dome.yaml");
+  const auto dslr = demo("dslr", source_dir() / "hw/rigs/sim-dome-dslr.yaml");
+  ASSERT_FALSE(sim.empty() || dslr.empty());
+  EXPECT_EQ(dslr["camera"], "dslr");
+  int retaken = 0;
+  for (const char* stage : {"chrome-1", "chrome-2", "object"}) {
+    EXPECT_EQ(dslr["captures"][stage]["frames"].get<int>(), 96) << stage;
+    retaken += dslr["captures"][stage]["retakes"].get<int>();
+  }
+  EXPECT_GE(retaken, 1) << "3 % of about 300 shots are lost and must be retaken";
+  const double sim_error = sim["solve"]["error_vs_ground_truth"]["mean_deg"].get<double>();
+  const double dslr_error = dslr["solve"]["error_vs_ground_truth"]["mean_deg"].get<double>();
+  RecordProperty("sim_camera_mean_error_deg", std::to_string(sim_error));
+  RecordProperty("dslr_mean_error_deg", std::to_string(dslr_error));
+  EXPECT_LE(dslr_error, 1.2 * sim_error)
+      << "DSLR " << dslr_error << " deg, sim: camera " << sim_error << " deg";
+  // The object's frames are the DSLR's files, each kept where it arrived.
+  std::ifstream manifest_file(dir / "dslr/capture/manifest.json");
+  const auto manifest = nlohmann::json::parse(manifest_file);
+  for (const auto& frame : manifest.at("frames")) {
+    const fs::path original = frame.at("source_image").get<std::string>();
+    EXPECT_EQ(original.parent_path(), dir / "dslr/shots/object");
+    EXPECT_TRUE(fs::exists(original)) << original;
+  }
+}
+
 TEST(DemoIntegration, AKilledDemoTakesItsDomeWithIt) {
   const fs::path dir = scratch_dir();
   const fs::path rig = unique_rig(dir);

@@ -3,6 +3,7 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/printable.hpp"
 #include "lightstage/common/rig_fingerprint.hpp"
+#include "lightstage/host/capture/file_camera.hpp"
 #include "lightstage/hw/cameras.hpp"
 #include "lightstage/sim/camera/sim_camera.hpp"
 
@@ -30,6 +31,7 @@ DomeConnection connect_dome(const std::filesystem::path& rig_path, const std::st
   dome.rig = load_rig(rig_path);
   hw::register_hw_cameras();
   sim::register_sim_camera();
+  register_file_cameras();
   dome.camera = camera::open_camera_uri(camera_uri);
   dome.controller = connect_controller(controller_uri);
   check_same_rig(dome.rig, rig_path, dome.controller->info());

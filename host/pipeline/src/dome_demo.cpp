@@ -5,6 +5,7 @@
 #include "lightstage/common/rig.hpp"
 #include "lightstage/host/calibration/calibrate_lights.hpp"
 #include "lightstage/host/calibration/calibration_output.hpp"
+#include "lightstage/host/capture/file_camera.hpp"
 #include "lightstage/host/controller/controller_client.hpp"
 #include "lightstage/host/demo/simulated_dome.hpp"
 #include "lightstage/host/io/image_io.hpp"
@@ -82,6 +83,17 @@ class DomeDemo {
  public:
   explicit DomeDemo(const DomeDemoOptions& options) : o_(options), rig_(load_rig(options.rig)) {
     if (o_.noise != "none" && o_.noise != "physical") fail("--noise: '{}' is not none or physical", o_.noise);
+    if (o_.camera != "sim" && o_.camera != "dslr") fail("--camera: '{}' is not sim or dslr", o_.camera);
+    if (dslr() && !(rig_.trigger.shutter_lag_us > 0 && rig_.trigger.arrival_timeout_us > 0)) {
+      fail(
+          "--camera dslr: rig '{}' ({}) describes no stills camera on its trigger (trigger.shutter_lag_us "
+          "and "
+          "trigger.arrival_timeout_us); use hw/rigs/sim-dome-dslr.yaml",
+          rig_.name, o_.rig.string());
+    }
+    if (!(o_.dslr_drop_rate >= 0 && o_.dslr_drop_rate < 1))
+      fail("--dslr-drop-rate must be in [0, 1), got {}", o_.dslr_drop_rate);
+    register_file_cameras();
     if (o_.sphere_x_mm.size() < 2) fail("demo: the light calibration needs two sphere positions");
     sim::register_sim_camera();
   }
@@ -95,10 +107,12 @@ class DomeDemo {
     solve_.no_clamp = true;
     solve_.resolve();
     // A demo starts afresh: what an earlier run wrote here goes (only what the demo writes).
-    for (const char* written : {"scenes", "calibration", "capture", "result", "surface", "dome", "demo.json"})
+    for (const char* written :
+         {"scenes", "calibration", "capture", "result", "surface", "dome", "shots", "demo.json"})
       fs::remove_all(o_.out / written);
     fs::create_directories(o_.out);
-    summary_ = {{"rig", o_.rig.string()}, {"scene", o_.scene}, {"method", o_.solve.method}};
+    summary_ = {
+        {"rig", o_.rig.string()}, {"scene", o_.scene}, {"method", o_.solve.method}, {"camera", o_.camera}};
 
     // 1. The chrome sphere at each position: the light calibration's input.
     std::vector<fs::path> chrome_stacks;
@@ -135,6 +149,17 @@ class DomeDemo {
   }
 
  private:
+  bool dslr() const { return o_.camera == "dslr"; }
+
+  // The simulated DSLR's shutter speed for a stage: a DSLR is set by hand, so
+  // the capture takes it as a fixed exposure, near what the sim: camera's
+  // automatic exposure picks (the chrome's highlights at half scale, the
+  // object's brightest pixels at 70 %). Standard speeds: 1/8 s and 1/125 s.
+  double dslr_exposure_us(const Stage& stage) const {
+    if (!stage.highlight_target && o_.capture.exposure_us) return *o_.capture.exposure_us;
+    return stage.highlight_target ? 125'000 : 8'000;
+  }
+
   void say(const std::string& text) const {
     if (o_.mode == OutputMode::kHuman) fmt::print("{}\n", text);
     logger("host")->debug("{}", text);
@@ -159,15 +184,33 @@ class DomeDemo {
     dome_options.socket_dir = sockets_.path() / stage.name;
     dome_options.program_dir = o_.programs;
     dome_options.sim_args = camera_args(stage);
-    dome_options.camera = true;
+    dome_options.camera = !dslr();
+    // The DSLR's RAW files are the capture's originals: kept beside the stacks.
+    const fs::path shots = o_.out / "shots" / stage.name;
+    if (dslr()) {
+      fs::create_directories(shots);
+      for (const std::string& arg :
+           {std::string("--dslr"), shots.string(), std::string("--dslr-exposure-us"),
+            fmt::format("{:.0f}", dslr_exposure_us(stage)), std::string("--dslr-drop-rate"),
+            fmt::format("{}", o_.dslr_drop_rate), std::string("--dslr-seed"), std::to_string(o_.seed)})
+        dome_options.sim_args.push_back(arg);
+      // With the half-press wired, the camera fires only with it (as some do): the firmware must press it.
+      if (const auto& focus = rig_.trigger.focus) {
+        dome_options.sim_args.push_back("--dslr-focus-line");
+        dome_options.sim_args.push_back(focus->line.by_name() ? focus->line.name : "FOCUS");
+      }
+      dome_options.sim_args.insert(dome_options.sim_args.end(), o_.dslr_args.begin(), o_.dslr_args.end());
+    }
     SimulatedDome dome(dome_options);
     CaptureReport report;
     try {
       auto controller = connect_controller(dome.controller_uri());
-      auto camera = camera::open_camera_uri(dome.camera_uri());
+      auto camera = camera::open_camera_uri(dslr() ? "folder:" + shots.string() : dome.camera_uri());
       CaptureOptions capture = o_.capture;
       capture.out = stage.stack;
-      if (stage.highlight_target) {
+      if (dslr()) {
+        capture.exposure_us = dslr_exposure_us(stage);
+      } else if (stage.highlight_target) {
         capture.exposure_us.reset();
         capture.auto_percentile = 1.0;
         capture.auto_target = 0.7;
@@ -186,9 +229,11 @@ class DomeDemo {
     summary_["captures"][stage.name] = report.to_json();
     summary_["captures"][stage.name]["stack"] = stage.stack.string();
     say(fmt::format(
-        "captured {:<9} {} frames + {} darks through lightstage-domed and the sim camera in {:.1f} s "
+        "captured {:<9} {} frames + {} darks through lightstage-domed and {} in {:.1f} s ({} retaken) "
         "-> {}",
-        stage.name, report.frames, report.dark_frames, seconds_since(start), stage.stack.string()));
+        stage.name, report.frames, report.dark_frames,
+        dslr() ? "the simulated DSLR's files" : "the sim camera", seconds_since(start), report.retakes,
+        stage.stack.string()));
   }
 
   void calibrate(const std::vector<fs::path>& stacks, const fs::path& out) {

@@ -82,6 +82,11 @@ std::uint32_t open_loop_on_us(double exposure_us) {
   return static_cast<std::uint32_t>(std::ceil(exposure_us * 1.05 + 300 - 1e-6));
 }
 
+std::uint32_t lit_overhead_us(const TriggerLine& trigger, std::uint32_t settle_us) {
+  return static_cast<std::uint32_t>(
+      std::min(std::ceil(trigger.lead_us(settle_us) + trigger.shutter_lag_us), 4e9));
+}
+
 std::uint32_t strobe_timeout_us(double exposure_us, double max_on_us, std::uint32_t settle_us) {
   // A camera may start its exposure late (trigger latency, a busy link); the strobe says when it ends.
   constexpr double kLateCameraUs = 200'000;
@@ -101,9 +106,9 @@ void check_on_time(const CapturePlan& plan, const OnTimeLimits& max_on_us, std::
       const double on_us = settle_us + static_cast<double>(open_loop_on_us(exposure_us));
       if (on_us > limit->second) {
         fail(
-            "capture: LED {} at {} us would be lit for {} us (settle {} us, exposure and trigger latency), "
-            "over "
-            "its max_on_us {} us; use a shorter --exposure-us (at most {:.0f} us) or --settle-us",
+            "capture: LED {} at {} us would be lit for {} us ({} us settle, half-press and shutter lag; "
+            "exposure and trigger latency), over its max_on_us {} us; use a shorter --exposure-us (at "
+            "most {:.0f} us) or --settle-us",
             frame.led_id, exposure_us, on_us, settle_us, limit->second,
             std::floor((limit->second - settle_us - 300) / 1.05));
       }
@@ -143,7 +148,8 @@ std::map<int, double> auto_exposures(const Rig& rig, const std::vector<int>& led
       double e = preview * options.auto_target * full / std::max(level, 1.0);
       // Steps of 1/6 stop, so LEDs group into few exposures (one sequence each).
       e = start * std::exp2(std::round(6 * std::log2(e / start)) / 6);
-      const double longest = longest_exposure_us(rig.led(id), range, options.settle_us);
+      const double longest =
+          longest_exposure_us(rig.led(id), range, lit_overhead_us(rig.trigger, options.settle_us));
       exposure[id] = std::clamp(e, std::max(range.exposure_min_us, 1.0), longest);
     }
     todo = saturated;

@@ -2,7 +2,9 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
+#include "lightstage/host/capture/capture_plan.hpp"
 #include "lightstage/host/capture/frame_matcher.hpp"
+#include "lightstage/host/capture/shot_matcher.hpp"
 
 #include <fmt/format.h>
 
@@ -24,10 +26,17 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 
 std::string led_name(int id) { return id < 0 ? std::string("dark") : fmt::format("LED {}", id); }
 
+// What a shutter-speed dial shows: "1/125 s", "0.6 s", "2 s".
+std::string shutter_speed_text(double exposure_us) {
+  if (exposure_us < 1e6) return fmt::format("1/{:.0f} s", 1e6 / exposure_us);
+  return fmt::format("{:g} s", exposure_us / 1e6);
+}
+
 }  // namespace
 
-CaptureRunner::CaptureRunner(ControllerClient& controller, camera::Camera& cam, const CaptureOptions& options)
-    : controller_(controller), cam_(cam), options_(options) {
+CaptureRunner::CaptureRunner(ControllerClient& controller, camera::Camera& cam, const CaptureOptions& options,
+                             const TriggerLine& trigger)
+    : controller_(controller), cam_(cam), options_(options), trigger_(trigger) {
   const bool strobe = controller_.info().capabilities().strobe_input();
   if (options_.loop == "closed" && !strobe) fail("--loop closed: the controller's rig has no strobe input");
   closed_loop_ = options_.loop == "closed" || (options_.loop == "auto" && strobe);
@@ -74,8 +83,9 @@ std::size_t CaptureRunner::steps_per_sequence() const {
 }
 
 void CaptureRunner::set_exposure(double exposure_us) {
-  if (exposure_us == current_exposure_us_) return;
+  if (exposure_us == asked_exposure_us_) return;
   const camera::Controls now = cam_.set_controls({exposure_us, std::nullopt});
+  asked_exposure_us_ = exposure_us;
   current_exposure_us_ = now.exposure_us.value_or(exposure_us);
   // Cameras that cannot say which frame a change reached (V4L2) need a few
   // frames to settle: take them dark and throw them away.
@@ -128,7 +138,8 @@ Batch CaptureRunner::run_batch(const std::vector<Shot>& shots) {
 // One controller sequence with the camera on hardware trigger, frames read on
 // a thread of their own while the sequence runs, then matched by trigger time.
 Batch CaptureRunner::run_batch_once(const std::vector<Shot>& shots) {
-  const double exposure_us = shots.front().exposure_us;
+  // Lit for what the camera really exposes when it rounded up (a stills camera's nearest shutter speed).
+  const double exposure_us = std::max(shots.front().exposure_us, current_exposure_us_);
   proto::Sequence sequence;
   sequence.set_id(next_sequence_id_++);
   for (std::size_t i = 0; i < shots.size(); ++i) {
@@ -144,8 +155,8 @@ Batch CaptureRunner::run_batch_once(const std::vector<Shot>& shots) {
     step->set_exposure_us(open_loop_on_us(exposure_us));
     step->set_wait_strobe(closed_loop_);
     // The controller counts the whole timeout against the LED's on-time limit.
-    step->set_strobe_timeout_us(
-        strobe_timeout_us(exposure_us, max_on_us(shots[i].led_id), options_.settle_us));
+    step->set_strobe_timeout_us(strobe_timeout_us(exposure_us, max_on_us(shots[i].led_id),
+                                                  lit_overhead_us(trigger_, options_.settle_us)));
     step->set_gap_us(options_.gap_us);
     step->set_tag(static_cast<std::uint32_t>(i));
   }
@@ -153,7 +164,9 @@ Batch CaptureRunner::run_batch_once(const std::vector<Shot>& shots) {
   std::mutex frames_mutex;
   std::atomic<bool> sequence_done{false};
   std::exception_ptr camera_error;
-  const auto wait_limit = std::chrono::milliseconds(static_cast<int>(1000 + 3 * exposure_us / 1000));
+  // A stills camera's files may take up to the rig's arrival timeout after each exposure.
+  const auto wait_limit = std::chrono::milliseconds(static_cast<std::int64_t>(
+      1000 + 3 * exposure_us / 1000 + (trigger_.shutter_lag_us + trigger_.arrival_timeout_us) / 1000));
   std::thread reader([&] {
     // A camera may deliver well after the sequence (slow readout, a busy
     // link): while frames keep coming it is late, not dropping them, so the
@@ -193,20 +206,13 @@ Batch CaptureRunner::run_batch_once(const std::vector<Shot>& shots) {
   std::erase_if(run.steps, [](const proto::StepEvent& e) { return e.outcome() != proto::OK; });
   std::vector<StepTiming> steps;
   for (const auto& e : run.steps) steps.push_back({e.trigger_ns(), exposure_us});
-  std::vector<FrameTiming> timings;
-  for (const auto& f : frames) {
-    const std::int64_t t =
-        f.clock == camera::ClockDomain::kUnknown
-            ? f.timestamp_ns
-            : camera::convert_timestamp_ns(f.timestamp_ns, f.clock, camera::ClockDomain::kMonotonic);
-    timings.push_back({t, f.timestamp_point, f.sequence});
-  }
-  const FrameMatch match = match_frames(steps, timings);
-  batch.duplicates = match.unmatched_frames.size();
+  const FrameMatch matched = match(steps, frames);
+  batch.duplicates = matched.unmatched_frames.size();
   for (std::size_t k = 0; k < run.steps.size(); ++k) {
-    if (!match.frame_of_step[k]) continue;
+    if (!matched.frame_of_step[k]) continue;
     const std::size_t shot = run.steps[k].tag();
-    batch.taken[shot] = Taken{std::move(frames[*match.frame_of_step[k]]), run.steps[k]};
+    check_stills_exposure(frames[*matched.frame_of_step[k]]);
+    batch.taken[shot] = Taken{std::move(frames[*matched.frame_of_step[k]]), run.steps[k]};
   }
   if (!run.ok()) {
     throw BatchAborted(fmt::format("controller: sequence {} ended {} after {} of {} steps: {}", sequence.id(),
@@ -217,11 +223,65 @@ Batch CaptureRunner::run_batch_once(const std::vector<Shot>& shots) {
   return batch;
 }
 
+// A stills camera is set by hand or to its nearest shutter speed: a shot far
+// from what was asked is a camera set wrong, not a frame to keep.
+void CaptureRunner::check_stills_exposure(const camera::Frame& frame) const {
+  if (!frame.own_clock || !frame.controls_reported || !(frame.exposure_us > 0) || !(current_exposure_us_ > 0))
+    return;
+  constexpr double kSixthStop = 1.0 / 6;
+  if (std::abs(std::log2(frame.exposure_us / current_exposure_us_)) <= kSixthStop) return;
+  throw Error(fmt::format(
+      "{}: {} was exposed {} but the capture asked {}: set the camera's shutter speed to {} (or capture with "
+      "--exposure-us {:.0f})",
+      cam_.uri(), frame.source_file, shutter_speed_text(frame.exposure_us),
+      shutter_speed_text(current_exposure_us_), shutter_speed_text(current_exposure_us_), frame.exposure_us));
+}
+
+FrameMatch CaptureRunner::match(const std::vector<StepTiming>& steps,
+                                const std::vector<camera::Frame>& frames) {
+  if (std::ranges::any_of(frames, &camera::Frame::own_clock)) {
+    if (!(trigger_.shutter_lag_us > 0)) {
+      fail(
+          "{}: a stills camera's files are matched to the LEDs by their time after each trigger, but the rig "
+          "gives no trigger.shutter_lag_us (and trigger.arrival_timeout_us): set both (docs/rig-format.md)",
+          cam_.uri());
+    }
+    std::vector<ShotTiming> shots;
+    for (const auto& f : frames) shots.push_back({f.timestamp_ns, f.timestamp_resolution_ns, f.arrived_ns});
+    const ShotMatch m =
+        match_shots(steps, shots,
+                    {std::llround(trigger_.shutter_lag_us * 1000),
+                     std::llround(trigger_.arrival_timeout_us * 1000), camera_clock_offset_ns_});
+    if (m.ambiguous) {
+      logger("capture")->warn(
+          "{}: {} files for {} steps and no way to tell which step lost its file: retaking them", cam_.uri(),
+          frames.size(), steps.size());
+    }
+    if (m.clock_offset_ns) {
+      // Over every file so far: the shutter lag's jitter averages out, a one-shot retake does not sway it.
+      const auto files = static_cast<long double>(steps.size() - m.dropped());
+      clock_offset_sum_ += static_cast<long double>(*m.clock_offset_ns) * files;
+      clock_offset_files_ += files;
+      camera_clock_offset_ns_ = std::llround(clock_offset_sum_ / clock_offset_files_);
+    }
+    return m;
+  }
+  std::vector<FrameTiming> timings;
+  for (const auto& f : frames) {
+    const std::int64_t t =
+        f.clock == camera::ClockDomain::kUnknown
+            ? f.timestamp_ns
+            : camera::convert_timestamp_ns(f.timestamp_ns, f.clock, camera::ClockDomain::kMonotonic);
+    timings.push_back({t, f.timestamp_point, f.sequence});
+  }
+  return match_frames(steps, timings);
+}
+
 // Cameras without a hardware trigger input: light the LED, trigger by software, wait.
 Batch CaptureRunner::run_software_batch(const std::vector<Shot>& shots) {
   Batch batch;
-  const auto timeout =
-      std::chrono::milliseconds(static_cast<int>(2000 + 3 * shots.front().exposure_us / 1000));
+  const auto timeout = std::chrono::milliseconds(static_cast<std::int64_t>(
+      2000 + 3 * shots.front().exposure_us / 1000 + trigger_.arrival_timeout_us / 1000));
   for (std::size_t i = 0; i < shots.size(); ++i) {
     std::vector<std::pair<std::uint32_t, float>> leds;
     if (shots[i].led_id >= 0) leds.emplace_back(static_cast<std::uint32_t>(shots[i].led_id), 1.0f);

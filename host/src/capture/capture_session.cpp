@@ -78,8 +78,9 @@ CaptureReport run_capture(const Rig& rig, ControllerClient& controller, camera::
   if (hdr) {
     for (const int id : led_ids) {
       if (!bracket_of.count(id)) {
-        bracket_of[id] = bracket_exposures(rig.led(id), exposure_of.at(id), options.bracket_stops,
-                                           cam.control_info(), options.settle_us);
+        bracket_of[id] =
+            bracket_exposures(rig.led(id), exposure_of.at(id), options.bracket_stops, cam.control_info(),
+                              lit_overhead_us(rig.trigger, options.settle_us));
       }
     }
   } else {
@@ -87,7 +88,7 @@ CaptureReport run_capture(const Rig& rig, ControllerClient& controller, camera::
   }
   const CapturePlan plan =
       make_plan(led_ids, exposure_of, bracket_of, options.bracket_stops, options.dark_frames);
-  check_on_time(plan, runner.on_time_limits(rig), options.settle_us);
+  check_on_time(plan, runner.on_time_limits(rig), lit_overhead_us(rig.trigger, options.settle_us));
 
   const camera::CameraInfo camera_info = cam.info();
   writer.set_plan(plan,
@@ -151,7 +152,7 @@ nlohmann::json CaptureReport::to_json() const {
 CaptureReport capture_stack(const Rig& rig, ControllerClient& controller, camera::Camera& cam,
                             const CaptureOptions& options) {
   options.check();
-  CaptureRunner runner(controller, cam, options);
+  CaptureRunner runner(controller, cam, options, rig.trigger);
   std::optional<InverseResponse> response;
   if (!options.response.empty()) response = InverseResponse::load(options.response);
   try {
@@ -172,7 +173,7 @@ std::vector<cv::Mat> capture_bracket(const Rig& rig, ControllerClient& controlle
   for (const double e : exposures_us) {
     if (!(e > 0)) fail("bracket: exposure {} us is not positive", e);
   }
-  CaptureRunner runner(controller, cam, options);
+  CaptureRunner runner(controller, cam, options, rig.trigger);
   rig.led(led_id);  // throws for an unknown id
   runner.start();
   std::vector<cv::Mat> images;

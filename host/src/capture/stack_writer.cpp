@@ -26,12 +26,18 @@ constexpr double kClippedShare = 0.98;
 
 // The camera's stamps of a frame and the controller's of its step.
 nlohmann::json stamps(const Taken& taken) {
-  return {{"frame_sequence", taken.frame.sequence},
-          {"frame_timestamp_ns", taken.frame.timestamp_ns},
-          {"frame_clock", std::string(camera::to_string(taken.frame.clock))},
-          {"trigger_ns", taken.step.trigger_ns()},
-          {"leds_on_ns", taken.step.leds_on_ns()},
-          {"leds_off_ns", taken.step.leds_off_ns()}};
+  nlohmann::json out = {{"frame_sequence", taken.frame.sequence},
+                        {"frame_timestamp_ns", taken.frame.timestamp_ns},
+                        {"frame_clock", std::string(camera::to_string(taken.frame.clock))},
+                        {"trigger_ns", taken.step.trigger_ns()},
+                        {"leds_on_ns", taken.step.leds_on_ns()},
+                        {"leds_off_ns", taken.step.leds_off_ns()}};
+  // A stills camera's shot: its own file stays where it arrived (the original, e.g. the RAW).
+  if (!taken.frame.source_file.empty()) {
+    out["source_image"] = taken.frame.source_file;
+    out["frame_clock"] = "camera";
+  }
+  return out;
 }
 
 std::string exposure_text(const std::optional<double>& fixed_us) {

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <exception>
 #include <mutex>
@@ -70,6 +71,31 @@ std::optional<std::string> taken(const Exiv2::ExifData& exif) {
 }
 
 }  // namespace
+
+std::optional<ExifTime> taken_time(const ExifInfo& exif) {
+  if (!exif.taken || exif.taken->size() < 19) return std::nullopt;
+  const std::string& t = *exif.taken;  // "YYYY-MM-DDTHH:MM:SS[.fff]", digits checked when read
+  const auto number = [&](std::size_t at, std::size_t digits) { return std::stoi(t.substr(at, digits)); };
+  const std::chrono::year_month_day day{std::chrono::year(number(0, 4)),
+                                        std::chrono::month(static_cast<unsigned>(number(5, 2))),
+                                        std::chrono::day(static_cast<unsigned>(number(8, 2)))};
+  const int hours = number(11, 2), minutes = number(14, 2), seconds = number(17, 2);
+  // Years a camera clock can hold and nanoseconds since 1970 can count (int64 ends in 2262).
+  if (!day.ok() || day.year() < std::chrono::year(1900) || day.year() > std::chrono::year(2261) ||
+      hours > 23 || minutes > 59 || seconds > 60)
+    return std::nullopt;
+  const auto midnight = std::chrono::sys_days(day).time_since_epoch();
+  ExifTime time;
+  time.ns = std::chrono::duration_cast<std::chrono::nanoseconds>(midnight).count() +
+            ((hours * 60LL + minutes) * 60 + seconds) * 1'000'000'000LL;
+  time.resolution_ns = 1'000'000'000;
+  if (t.size() > 20) {
+    const std::string fraction = t.substr(20);  // 1..9 digits
+    for (std::size_t i = 0; i < fraction.size(); ++i) time.resolution_ns /= 10;
+    time.ns += std::stoll(fraction) * time.resolution_ns;
+  }
+  return time;
+}
 
 bool ExifInfo::empty() const {
   return make.empty() && model.empty() && !exposure_s && !iso && !f_number && !taken;

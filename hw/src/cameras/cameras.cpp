@@ -1,5 +1,9 @@
-// The hardware camera schemes, registered with common/camera.hpp's registry.
+// The hardware camera schemes, registered with common/camera.hpp's registry,
+// and the stand-ins for backends this build lacks (gphoto2's too).
 #include "lightstage/hw/cameras.hpp"
+#include "lightstage/hw/gphoto2_source.hpp"
+
+#include <fmt/format.h>
 
 #include <mutex>
 
@@ -23,12 +27,32 @@ camera::CameraScheme libcamera_camera_scheme() {
           {}};
 }
 #endif
+#ifndef LIGHTSTAGE_HAVE_ARAVIS
+camera::CameraScheme aravis_camera_scheme() {
+  return {"aravis",
+          "aravis:DEVICE_ID",
+          "this build has no aravis backend (install libaravis-dev and rebuild)",
+          {},
+          {}};
+}
+#endif
+#ifndef LIGHTSTAGE_HAVE_GPHOTO2
+std::vector<camera::CameraInfo> list_gphoto2_cameras() { return {}; }
+
+std::unique_ptr<camera::ShotSource> open_gphoto2_source(const camera::CameraUri& uri,
+                                                        const std::filesystem::path&) {
+  throw camera::CameraError(
+      camera::CameraError::Kind::kUnsupported,
+      fmt::format("{}: this build has no gphoto2 backend (install libgphoto2-dev and rebuild)", uri.uri));
+}
+#endif
 
 void register_hw_cameras() {
   static std::once_flag once;
   std::call_once(once, [] {
     camera::register_camera_scheme(v4l2_camera_scheme());
     camera::register_camera_scheme(libcamera_camera_scheme());
+    camera::register_camera_scheme(aravis_camera_scheme());
   });
 }
 

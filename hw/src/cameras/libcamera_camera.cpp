@@ -96,14 +96,10 @@ std::optional<libcamera::PixelFormat> their_format(std::string_view name) {
 }
 
 std::string list_ids(const std::vector<std::string>& ids) {
-  if (ids.empty()) {
-    return "libcamera sees no camera (is the sensor's device-tree overlay loaded, and for most sensors the "
-           "IPA "
-           "package libcamera-ipa installed? see hw/docs/cameras.md)";
-  }
-  std::string text = "cameras: ";
-  for (std::size_t i = 0; i < ids.size(); ++i) text += (i ? ", " : "") + ("libcamera:" + ids[i]);
-  return text;
+  return list_camera_uris(
+      "libcamera", ids,
+      "libcamera sees no camera (is the sensor's device-tree overlay loaded, and for most "
+      "sensors the IPA package libcamera-ipa installed? see hw/docs/cameras.md)");
 }
 
 // One mapped plane of a FrameBuffer (dma-buf).
@@ -179,10 +175,7 @@ class LibcameraCamera final : public camera::Camera {
     camera::CameraConfig config = requested;
     camera::Validation v;
     std::unique_ptr<libcamera::CameraConfiguration> lc = make_configuration(config, v);
-    if (!lc || v.status != camera::ConfigStatus::kValid) {
-      throw CameraError(fmt::format("{}: configuration is {} ({}); call validate() and apply what it returns",
-                                    uri(), camera::to_string(v.status), v.message()));
-    }
+    require_valid(v, uri());  // make_configuration() notes a refusal whenever it returns nullptr
     release_buffers();
     if (const int ret = camera_->configure(lc.get()); ret != 0) fail_ret("configure", ret);
     configuration_ = std::move(lc);
@@ -405,23 +398,7 @@ class LibcameraCamera final : public camera::Camera {
       adjust(fmt::format("buffer_count {} set to {} by libcamera", config.buffer_count, stream.bufferCount));
       config.buffer_count = static_cast<int>(stream.bufferCount);
     }
-    if (config.roi) {
-      camera::Roi& roi = *config.roi;
-      if (roi.width <= 0 || roi.height <= 0) {
-        invalid(fmt::format("roi {}x{}+{}+{} is empty", roi.width, roi.height, roi.x, roi.y));
-      } else if (roi.x < 0 || roi.y < 0 || roi.x + roi.width > size.width ||
-                 roi.y + roi.height > size.height) {
-        camera::Roi clamped = roi;
-        clamped.x = std::clamp(roi.x, 0, size.width - 1);
-        clamped.y = std::clamp(roi.y, 0, size.height - 1);
-        clamped.width = std::min(roi.width, size.width - clamped.x);
-        clamped.height = std::min(roi.height, size.height - clamped.y);
-        adjust(fmt::format("roi {}x{}+{}+{} reaches outside the {}x{} frame; clamped to {}x{}+{}+{}",
-                           roi.width, roi.height, roi.x, roi.y, size.width, size.height, clamped.width,
-                           clamped.height, clamped.x, clamped.y));
-        roi = clamped;
-      }
-    }
+    clamp_roi(v, config.roi, size);
     return lc;
   }
 

@@ -16,7 +16,6 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -58,15 +57,6 @@ std::string fourcc_text(std::uint32_t code) {
   return text;
 }
 
-double parse_positive(const camera::CameraUri& uri, const char* key, const std::string& text) {
-  double value = 0;
-  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (ec != std::errc() || end != text.data() + text.size() || !(value > 0)) {
-    fail("camera URI '{}': option {}={} is not a positive number", uri.uri, key, text);
-  }
-  return value;
-}
-
 // One V4L2 control as found by VIDIOC_QUERYCTRL.
 struct Ctrl {
   std::uint32_t id = 0;
@@ -97,7 +87,7 @@ class V4l2Camera final : public camera::Camera {
       query_controls();
       if (!formats_.empty()) {
         config_.pixel_format = formats_.front().pixel_format;
-        config_.size = largest(formats_.front());
+        config_.size = largest_size(formats_.front());
       }
       // The format in force when we opened: configure() is required only to change it.
       v4l2_format fmt{};
@@ -131,48 +121,11 @@ class V4l2Camera final : public camera::Camera {
 
   camera::Validation validate(camera::CameraConfig& config) const override {
     camera::Validation v;
-    auto adjust = [&](std::string note) { note_adjusted(v, std::move(note)); };
-    auto invalid = [&](std::string note) { note_invalid(v, std::move(note)); };
-    if (config.pixel_format.empty()) config.pixel_format = config_.pixel_format;
-    const auto format = std::find_if(formats_.begin(), formats_.end(), [&](const camera::FormatInfo& f) {
-      return f.pixel_format == config.pixel_format;
-    });
-    if (format == formats_.end()) {
-      std::string names;
-      for (const auto& f : formats_) names += (names.empty() ? "" : ", ") + f.pixel_format;
-      invalid(fmt::format("pixel_format '{}' is not one this camera delivers ({})", config.pixel_format,
-                          names.empty() ? "none that Lightstage can unpack" : names));
-      return v;
-    }
-    if (config.size.width == 0 && config.size.height == 0) {
-      config.size = largest(*format);
-    } else {
-      const camera::Size nearest = nearest_size(*format, config.size);
-      if (!(nearest == config.size)) {
-        adjust(fmt::format("size {}x{} is not offered for {}; nearest is {}x{}", config.size.width,
-                           config.size.height, config.pixel_format, nearest.width, nearest.height));
-        config.size = nearest;
-      }
-    }
-    if (config.roi) {
-      camera::Roi& roi = *config.roi;
-      if (roi.width <= 0 || roi.height <= 0) {
-        invalid(fmt::format("roi {}x{}+{}+{} is empty", roi.width, roi.height, roi.x, roi.y));
-      } else {
-        const camera::Roi clamped = clamp_roi(roi, config.size);
-        if (!(clamped == roi)) {
-          adjust(fmt::format("roi {}x{}+{}+{} reaches outside the {}x{} frame; clamped to {}x{}+{}+{}",
-                             roi.width, roi.height, roi.x, roi.y, config.size.width, config.size.height,
-                             clamped.width, clamped.height, clamped.x, clamped.y));
-          roi = clamped;
-        }
-      }
-    }
-    if (config.buffer_count < 2 || config.buffer_count > 32) {
-      const int clamped = std::clamp(config.buffer_count, 2, 32);
-      adjust(fmt::format("buffer_count {} is outside [2, 32]; set to {}", config.buffer_count, clamped));
-      config.buffer_count = clamped;
-    }
+    const camera::FormatInfo* format = find_offered_format(v, config, formats_, config_.pixel_format);
+    if (!format) return v;
+    snap_size(v, config, *format, /*name_format=*/true);  // VIDIOC_ENUM_FRAMESIZES is per format
+    clamp_roi(v, config.roi, config.size);
+    clamp_buffer_count(v, config.buffer_count, 2, 32);
     return v;
   }
 
@@ -180,11 +133,7 @@ class V4l2Camera final : public camera::Camera {
     if (streaming_)
       throw CameraError(fmt::format("{}: cannot configure while streaming; stop() first", uri()));
     camera::CameraConfig config = requested;
-    const camera::Validation v = validate(config);
-    if (v.status != camera::ConfigStatus::kValid) {
-      throw CameraError(fmt::format("{}: configuration is {} ({}); call validate() and apply what it returns",
-                                    uri(), camera::to_string(v.status), v.message()));
-    }
+    require_valid(validate(config), uri());
     const PixelFormatDesc* desc = find_pixel_format(config.pixel_format);
     v4l2_format fmt{};
     fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -554,44 +503,6 @@ class V4l2Camera final : public camera::Camera {
     width_px_ = static_cast<int>(pix.width);
     stride_ =
         std::max<std::size_t>(pix.bytesperline, min_row_bytes(desc->packing, static_cast<int>(pix.width)));
-  }
-
-  static camera::Size largest(const camera::FormatInfo& format) {
-    camera::Size best;
-    for (const auto& range : format.sizes) {
-      if (static_cast<long>(range.max.width) * range.max.height >
-          static_cast<long>(best.width) * best.height) {
-        best = range.max;
-      }
-    }
-    return best;
-  }
-
-  static camera::Size nearest_size(const camera::FormatInfo& format, camera::Size want) {
-    camera::Size best;
-    long best_cost = -1;
-    for (const auto& r : format.sizes) {
-      auto snap = [](int v, int lo, int hi, int step) {
-        v = std::clamp(v, lo, hi);
-        return std::min(lo + (v - lo + step / 2) / step * step, hi);
-      };
-      const camera::Size s{snap(want.width, r.min.width, r.max.width, r.step_width),
-                           snap(want.height, r.min.height, r.max.height, r.step_height)};
-      const long cost = std::labs(s.width - want.width) + std::labs(s.height - want.height);
-      if (best_cost < 0 || cost < best_cost) {
-        best = s;
-        best_cost = cost;
-      }
-    }
-    return best;
-  }
-
-  static camera::Roi clamp_roi(camera::Roi roi, camera::Size size) {
-    roi.x = std::clamp(roi.x, 0, std::max(0, size.width - 1));
-    roi.y = std::clamp(roi.y, 0, std::max(0, size.height - 1));
-    roi.width = std::min(roi.width, size.width - roi.x);
-    roi.height = std::min(roi.height, size.height - roi.y);
-    return roi;
   }
 
   void queue_buffer(std::uint32_t index) {

@@ -32,6 +32,7 @@ std::vector<PendingLine> rig_lines(const Rig& rig) {
     lines.push_back({ref, spec, std::move(default_name)});
   };
   add(rig.trigger.line, LineRole::kTrigger, "TRIGGER");
+  if (rig.trigger.focus) add(rig.trigger.focus->line, LineRole::kFocus, "FOCUS");
   if (rig.strobe) add(rig.strobe->line, LineRole::kStrobe, "STROBE");
   const bool prefix_chains = rig.chains.size() > 1;
   for (std::size_t i = 0; i < rig.chains.size(); ++i) {

@@ -192,7 +192,7 @@ enum class TimestampPoint { kStartOfExposure, kEndOfFrame, kUnknown };
 std::string_view to_string(TimestampPoint point);
 
 struct Frame {
-  cv::Mat image;  // CV_8UC1 or CV_16UC1, owned by the frame
+  cv::Mat image;  // CV_8UC1 or CV_16UC1 (file cameras: also CV_16UC3, BGR), owned by the frame
   std::string pixel_format;
   int bit_depth = 8;
   Cfa cfa = Cfa::kNone;
@@ -205,6 +205,15 @@ struct Frame {
   // True when the device reported exposure and gain for this very frame;
   // false when they are the values last set (see ControlInfo::latency_frames).
   bool controls_reported = false;
+  // Stills cameras whose shots arrive as files (shot_source.hpp): the stamp is
+  // the camera's own clock (EXIF, clock kRealtime read as UTC), off the
+  // host's by an unknown amount, in steps of timestamp_resolution_ns (1 ms
+  // with sub-second EXIF, 1 s without, 0 = no stamp); arrived_ns is
+  // CLOCK_MONOTONIC when the file arrived; source_file the file itself.
+  bool own_clock = false;
+  std::int64_t timestamp_resolution_ns = 0;
+  std::int64_t arrived_ns = 0;
+  std::string source_file;
 };
 
 // Crops `frame` to `roi` (bounds checked; names `uri` in the error) and keeps

@@ -6,6 +6,7 @@
 
 #include "lightstage/common/geometry.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -67,9 +68,27 @@ struct Led {
   LedLimits limits;
 };
 
-struct TriggerLine {
+// A stills camera's remote-release half-press: asserted `lead_us` before the
+// shutter (at the step's start), released with it. Some cameras fire only
+// with it; on others it wakes the camera.
+struct FocusLine {
   LineRef line;
+  double lead_us = 0;
+};
+
+struct TriggerLine {
+  LineRef line;  // a machine-vision trigger input, or a stills camera's shutter (full press)
   double pulse_us = 100;
+  std::optional<FocusLine> focus;
+  // The longest a camera takes from the trigger edge to the start of its
+  // exposure (a DSLR's shutter lag): the LEDs stay lit for it as well as the exposure.
+  double shutter_lag_us = 0;
+  // Cameras whose shots arrive as files: the longest from the end of an
+  // exposure to the file's arrival (card write, download); 0 = a streaming camera.
+  double arrival_timeout_us = 0;
+
+  // LEDs on to trigger for a step that asks `settle_us`: longer when the half-press lead is.
+  double lead_us(double settle_us) const { return focus ? std::max(settle_us, focus->lead_us) : settle_us; }
 };
 
 struct StrobeLine {

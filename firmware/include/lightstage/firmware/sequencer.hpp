@@ -3,11 +3,15 @@
 // and reports what actually happened and when.
 //
 // One step (controller.proto, Step), with its planned times:
-//   on      = the step's start              LEDs on
-//   trigger = on + settle_us                trigger asserted (if `trigger`)
-//             trigger + pulse (rig)         trigger released
-//   off     = trigger + exposure_us         LEDs off (open loop), or at the
-//             strobe's falling edge         (closed loop, `wait_strobe`)
+//   on      = the step's start              LEDs on (and a stills camera's
+//                                           half-press, when the rig has one)
+//   trigger = on + settle                   trigger asserted (if `trigger`);
+//                                           settle = settle_us, or the rig's
+//                                           focus lead when that is longer
+//             trigger + pulse (rig)         trigger and half-press released
+//   off     = trigger + shutter lag (rig)   LEDs off (open loop), or at the
+//             + exposure_us                 strobe's falling edge (closed
+//                                           loop, `wait_strobe`)
 //   next    = off + gap_us                  the next step's start
 // The plan is absolute, computed from the sequence's start (and, after a
 // closed-loop step, from the strobe edge that ended it), so time spent working
@@ -86,7 +90,10 @@ class Sequencer {
 
   // The LEDs a step lights (level > 0), in the step's order.
   static std::vector<int> lit_leds(const proto::Step& step);
-  // The longest the step may keep its LEDs lit, in microseconds.
+  // LEDs on to trigger, in microseconds: settle_us, or longer for the rig's half-press lead.
+  double settle_us(const proto::Step& step) const;
+  // The longest the step may keep its LEDs lit, in microseconds (the rig's
+  // shutter lag included).
   double worst_case_on_us(const proto::Step& step) const;
 
  private:

@@ -1,6 +1,7 @@
 #pragma once
-// What hardware this machine can see, per backend: GPIO chips, V4L2 and
-// libcamera cameras, USB devices. `lightstage devices` prints it, so an
+// What hardware this machine can see, per backend: GPIO chips, V4L2,
+// libcamera and GenICam (aravis) cameras, DSLR / mirrorless cameras
+// (gphoto2), USB devices. `lightstage devices` prints it, so an
 // operator can find the URI to pass before anything is opened for real.
 
 #include <string>
@@ -14,8 +15,8 @@ struct DeviceInfo {
 };
 
 struct ProbeReport {
-  std::string scheme;   // "gpiod", "v4l2", "libcamera", "usb"
-  bool built = false;   // false: this build has no such backend
+  std::string scheme;  // "gpiod", "v4l2", "libcamera", "aravis", "gphoto2", "usb"
+  bool built = false;  // false: this build has no such backend
   std::vector<DeviceInfo> devices;
   std::string problem;  // why enumeration failed, when it did (e.g. no USB support)
 };
@@ -26,6 +27,8 @@ std::vector<ProbeReport> probe_devices();
 ProbeReport probe_gpiod();
 ProbeReport probe_v4l2();
 ProbeReport probe_libcamera();
+ProbeReport probe_aravis();
+ProbeReport probe_gphoto2();
 ProbeReport probe_usb();
 
 }  // namespace lightstage::hw

@@ -52,6 +52,12 @@ double longest_exposure_us(const Led& led, const camera::ControlInfo& range, std
 // exposure with room for the camera's trigger latency.
 std::uint32_t open_loop_on_us(double exposure_us);
 
+// How long the controller lights a step's LED besides open_loop_on_us: the
+// settle time (or the rig's half-press lead, when longer) and the camera's
+// shutter lag (see the firmware's sequencer.hpp). What the `settle_us`
+// parameters below take when they check on-time limits.
+std::uint32_t lit_overhead_us(const TriggerLine& trigger, std::uint32_t settle_us);
+
 // Closed loop: how long a step waits for the camera's strobe (its LED lit
 // meanwhile): the exposure plus room for a late camera, but when an LED is lit
 // (max_on_us > 0) no longer than its on-time limit leaves after `settle_us`.

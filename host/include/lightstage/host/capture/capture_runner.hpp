@@ -6,14 +6,17 @@
 // Dropped frames are retaken, frames matched to no step dropped as duplicates.
 
 #include "lightstage/common/camera.hpp"
+#include "lightstage/common/rig.hpp"
 #include "lightstage/host/capture/capture_options.hpp"
 #include "lightstage/host/capture/capture_plan.hpp"
+#include "lightstage/host/capture/frame_matcher.hpp"
 #include "lightstage/host/controller/controller_client.hpp"
 
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -65,8 +68,11 @@ struct RunStats {
 class CaptureRunner {
  public:
   // Closed loop with --loop closed, or auto and a strobe input on the rig;
-  // throws InputError for closed without one. Hardware trigger when the camera has one.
-  CaptureRunner(ControllerClient& controller, camera::Camera& cam, const CaptureOptions& options);
+  // throws InputError for closed without one. Hardware trigger when the camera
+  // has one. `trigger` is the rig's: a stills camera's shutter lag and its
+  // files' arrival timeout (how frames are matched and waited for).
+  CaptureRunner(ControllerClient& controller, camera::Camera& cam, const CaptureOptions& options,
+                const TriggerLine& trigger = {});
 
   // Configures the camera for the trigger, sets the options' gain and starts streaming.
   void start();
@@ -104,14 +110,22 @@ class CaptureRunner {
   Batch run_batch_once(const std::vector<Shot>& shots);
   Batch run_software_batch(const std::vector<Shot>& shots);
   Batch run_counted(const std::vector<Shot>& shots);
+  // Which frame goes with which step (frame_matcher.hpp, or shot_matcher.hpp for a stills camera's files).
+  FrameMatch match(const std::vector<StepTiming>& steps, const std::vector<camera::Frame>& frames);
+  void check_stills_exposure(const camera::Frame& frame) const;
 
   ControllerClient& controller_;
   camera::Camera& cam_;
   CaptureOptions options_;
+  TriggerLine trigger_;
+  // A stills camera's clock offset (shot_matcher.hpp), averaged over every file matched so far.
+  std::optional<std::int64_t> camera_clock_offset_ns_;
+  long double clock_offset_sum_ = 0, clock_offset_files_ = 0;
   bool closed_loop_ = false;
   bool hardware_ = false;
   double gain_ = 1;
-  double current_exposure_us_ = 0;
+  double asked_exposure_us_ = 0;
+  double current_exposure_us_ = 0;  // what the camera said it applied
   std::uint32_t next_sequence_id_ = 1;
   RunStats stats_;
 };

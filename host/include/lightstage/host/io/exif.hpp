@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -24,6 +25,14 @@ struct ExifInfo {
   // The fields present, as {"make", "model", "exposure_s", "iso", "f_number", "taken"}.
   nlohmann::json to_json() const;
 };
+
+// `taken` as nanoseconds since 1970 (read as UTC: EXIF has no zone) and the
+// step it was written in (1 s, or finer with sub-seconds); nullopt without it.
+struct ExifTime {
+  std::int64_t ns = 0;
+  std::int64_t resolution_ns = 0;
+};
+std::optional<ExifTime> taken_time(const ExifInfo& exif);
 
 // Reads the EXIF of `path`. Fields the file does not hold (or holds malformed:
 // a zero denominator, an unparsable date) stay empty. Throws InputError naming

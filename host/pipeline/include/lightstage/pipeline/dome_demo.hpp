@@ -2,7 +2,7 @@
 // `lightstage demo`: the real pipeline on the simulated dome. lightstage-sim
 // (virtual gpiochip and camera) and lightstage-domed (the firmware) run as
 // their own processes; this process captures through the protocol and the
-// sim: camera exactly as on a rig — a chrome sphere at two positions for the
+// sim: camera (or the simulated DSLR's files) exactly as on a rig — a chrome sphere at two positions for the
 // light calibration, then the object — calibrates, solves with the
 // calibrated (near) lights, integrates a surface and writes the report.
 
@@ -38,6 +38,12 @@ struct DomeDemoOptions {
   // large sphere, far apart, as docs/calibration.md recommends for LED positions.
   double sphere_radius_mm = 25;
   std::vector<double> sphere_x_mm = {-25, 25};
+  // sim: lightstage-sim's virtual camera (sim:); dslr: its simulated DSLR on
+  // the remote port, writing DNGs that the host takes from the folder
+  // (folder:) -- the rig must describe the DSLR's trigger (hw/rigs/sim-dome-dslr.yaml).
+  std::string camera = "sim";
+  double dslr_drop_rate = 0.02;  // the simulated DSLR loses this share of its shots, as real tethering does
+  std::vector<std::string> dslr_args;          // more lightstage-sim --dslr-* flags
   CaptureOptions capture;                      // exposure, darks, loop; `out` and `mode` are set per stage
   SolveSettings solve = default_demo_solve();  // any method of the registry (solve_methods.hpp)
   OutputMode mode = OutputMode::kHuman;

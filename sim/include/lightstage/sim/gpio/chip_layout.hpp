@@ -4,11 +4,10 @@
 // strobe input, a shift-register chain's data/clock/latch/output-enable).
 //
 // Naming: a line the rig names keeps that name; otherwise a direct LED line is
-// "LED<id>", the trigger "TRIGGER", the strobe "STROBE", and a chain line
-// "SR_DATA" / "SR_CLK" / "SR_LATCH" / "SR_OE" (prefixed with "<chain>_" when
-// the rig has more than one chain). Offsets: the rig's where it gives one;
-// lines referenced only by name take the lowest free offsets, in rig-file
-// order (trigger, strobe, chains, LEDs). Offsets no rig line uses stay unnamed.
+// "LED<id>", the trigger "TRIGGER", a stills camera's half-press "FOCUS", the strobe "STROBE", and a chain
+// line "SR_DATA" / "SR_CLK" / "SR_LATCH" / "SR_OE" (prefixed with "<chain>_" when the rig has more than one
+// chain). Offsets: the rig's where it gives one; lines referenced only by name take the lowest free offsets,
+// in rig-file order (trigger, focus, strobe, chains, LEDs). Offsets no rig line uses stay unnamed.
 
 #include "lightstage/common/rig.hpp"
 
@@ -22,6 +21,7 @@ enum class LineRole {
   kUnused,
   kLed,
   kTrigger,
+  kFocus,
   kStrobe,
   kChainData,
   kChainClock,
