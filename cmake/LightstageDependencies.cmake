@@ -20,6 +20,8 @@ if(NOT LIGHTSTAGE_CONTROLLER_ONLY)
   # Camera files: RAW through LibRaw (its thread-safe libraw_r), TIFF and DNG
   # through libtiff, EXIF through exiv2.
   find_package(TIFF 4.5 REQUIRED)
+  # PNG rows a band at a time (io/row_reader.hpp): libpng itself, not OpenCV's whole-image decoder.
+  find_package(PNG 1.6 REQUIRED)
   pkg_check_modules(LIBRAW REQUIRED IMPORTED_TARGET libraw_r>=0.20)
   # Its pkg-config file adds -I.../libraw and -fopenmp to every compile of the
   # library that links it; <libraw/libraw.h> needs neither.

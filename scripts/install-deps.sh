@@ -20,7 +20,7 @@ packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-photo-dev
-  libopenexr-dev libraw-dev libtiff-dev libexiv2-dev
+  libopenexr-dev libraw-dev libpng-dev libtiff-dev libexiv2-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libgpiod-dev libusb-1.0-0-dev libcamera-dev

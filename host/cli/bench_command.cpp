@@ -3,6 +3,7 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
 #include "lightstage/host/progress.hpp"
+#include "lightstage/pipeline/decode_floor.hpp"
 #include "lightstage/pipeline/material_sweep.hpp"
 #include "lightstage/pipeline/rti_exchange.hpp"
 #include "options.hpp"
@@ -69,6 +70,34 @@ void add_bench_holdout(CLI::App& bench) {
   });
 }
 
+void add_bench_decode(CLI::App& bench) {
+  struct Args {
+    std::string input;
+    int threads = 0;
+    OutputFlags output;
+  };
+  auto args = std::make_shared<Args>();
+  CLI::App* sub = bench.add_subcommand(
+      "decode",
+      "The decode floor of a stack: the time to decode every frame on --threads cores (a frame per core, "
+      "each dropped once decoded, so any stack fits), the least a solve of it can take. Solve times are "
+      "given as a ratio to it (scripts/bench-large-stack.py; docs/large-captures.md).\n"
+      "Example: lightstage bench decode --input out/stack");
+  sub->add_option("--input", args->input, "stack folder")->required();
+  sub->add_option("--threads", args->threads, "decoding threads (0 = all cores)")->capture_default_str();
+  add_output_flags(*sub, args->output, "seconds, frames, decoded_bytes and threads");
+  sub->callback([args, sub] {
+    apply_output_flags(*sub, args->output);
+    const pipeline::DecodeFloor floor = pipeline::measure_decode_floor(args->input, args->threads);
+    if (args->output.json) {
+      fmt::print("{}\n", floor.to_json().dump());
+    } else if (args->output.human()) {
+      fmt::print("decoded {} frames ({:.1f} MB) on {} threads in {:.3f} s\n", floor.frames,
+                 static_cast<double>(floor.decoded_bytes) / 1e6, floor.threads, floor.seconds);
+    }
+  });
+}
+
 }  // namespace
 
 void add_bench(CLI::App& app) {
@@ -89,6 +118,7 @@ void add_bench(CLI::App& app) {
     OutputFlags output;
   };
   add_bench_holdout(*bench);
+  add_bench_decode(*bench);
   auto args = std::make_shared<Args>();
   CLI::App* sub = bench->add_subcommand(
       "materials",

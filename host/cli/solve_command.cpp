@@ -72,18 +72,12 @@ void add_solve(CLI::App& app) {
     args->solve.resolve();
     std::unique_ptr<Progress> progress;
     const auto report = pipeline::solve_folder(
-        args->input, args->solve.radiometry,
-        [&](const pipeline::SolveInput& prepared) {
-          const pipeline::SolveWork work = pipeline::solve_work(args->solve, prepared.observations);
+        args->input, args->solve, args->out, args->calibration, [&](const pipeline::SolveWork& work) {
           progress = std::make_unique<Progress>("solve " + args->solve.method, work.total, work.unit,
                                                 args->output.mode());
-          pipeline::SolveSettings solve = args->solve;
-          solve.set_progress([p = progress.get()](std::size_t items) { p->advance(items); });
-          SolveResult result = pipeline::solve_with(prepared.observations, solve, prepared.shadow);
-          progress->finish();
-          return result;
-        },
-        args->out, args->calibration);
+          return [p = progress.get()](std::size_t items) { p->advance(items); };
+        });
+    if (progress) progress->finish();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (args->output.json) {
       nlohmann::json j = report.summary;

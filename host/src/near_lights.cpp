@@ -19,15 +19,16 @@ void near_light_directions(const NearLights& near, std::size_t pixel, Eigen::Mat
   }
 }
 
-Eigen::MatrixX3d points_on_plane(const std::vector<cv::Point>& pixels, const PixelRay& ray,
-                                 double plane_z_mm) {
+Eigen::MatrixX3d points_on_plane(const std::vector<cv::Point>& pixels, const PixelRay& ray, double plane_z_mm,
+                                 cv::Point origin) {
   Eigen::MatrixX3d points(static_cast<Eigen::Index>(pixels.size()), 3);
   for (std::size_t p = 0; p < pixels.size(); ++p) {
-    Eigen::Vector3d origin, direction;
-    ray(Eigen::Vector2d(pixels[p].x + 0.5, pixels[p].y + 0.5), &origin, &direction);
+    Eigen::Vector3d start, direction;
+    const cv::Point at = pixels[p] + origin;
+    ray(Eigen::Vector2d(at.x + 0.5, at.y + 0.5), &start, &direction);
     // A ray parallel to the plane (never for a camera looking at the object) keeps its origin's x, y.
-    const double t = std::abs(direction.z()) > 1e-12 ? (plane_z_mm - origin.z()) / direction.z() : 0.0;
-    points.row(static_cast<Eigen::Index>(p)) = (origin + t * direction).transpose();
+    const double t = std::abs(direction.z()) > 1e-12 ? (plane_z_mm - start.z()) / direction.z() : 0.0;
+    points.row(static_cast<Eigen::Index>(p)) = (start + t * direction).transpose();
     if (std::abs(direction.z()) <= 1e-12) points(static_cast<Eigen::Index>(p), 2) = plane_z_mm;
   }
   return points;

@@ -37,31 +37,31 @@ double quantile(std::vector<float> values, double q) {
   return values[k];
 }
 
-// Each sampled mask pixel's darkest observation.
-std::vector<float> darkest_observations(const Observations& observations) {
-  std::vector<float> darkest;
-  const auto rows = static_cast<std::size_t>(observations.intensities.rows());
-  if (observations.intensities.cols() == 0) return darkest;
-  const std::size_t stride = std::max<std::size_t>(1, rows / kMaxObjectPixels);
-  for (std::size_t p = 0; p < rows; p += stride)
-    darkest.push_back(observations.intensities.row(static_cast<Eigen::Index>(p)).minCoeff());
-  return darkest;
+// One in every `stride` of the whole image's mask pixels (in scan order) is sampled.
+std::size_t object_stride(std::size_t total_pixels) {
+  return std::max<std::size_t>(1, total_pixels / kMaxObjectPixels);
 }
 
-// A camera without a black level clips the negative half of the noise in its
-// shadows to exact zeros: a shadowed pixel then has zeros and about as many
-// small positive values, the noise's other half (a half-normal whose 1 σ
-// quantile is σ). Noise-free data has zeros too, but the values next to them
-// are the dimmest shading, a sizeable part of the pixel's lit values; so the
-// partners count as noise only when they sit far below those. 0 = not found.
-double clipped_noise_sigma(const Observations& observations) {
+}  // namespace
+
+ShadowSamples::ShadowSamples(std::size_t total_pixels) : stride_(object_stride(total_pixels)) {}
+
+void ShadowSamples::add_object(const Observations& observations) {
   const auto rows = static_cast<std::size_t>(observations.intensities.rows());
-  const auto images = static_cast<std::size_t>(observations.intensities.cols());
-  if (images == 0) return 0;
-  const std::size_t stride = std::max<std::size_t>(1, rows / kMaxObjectPixels);
-  std::vector<float> partners, lit_medians, positive;
-  for (std::size_t p = 0; p < rows; p += stride) {
+  if (observations.intensities.cols() == 0) return;
+  std::vector<float> positive;
+  // The first pixel of these observations that falls on the whole image's stride.
+  const std::size_t first = observations.first_pixel;
+  for (std::size_t p = (stride_ - first % stride_) % stride_; p < rows; p += stride_) {
     const auto row = observations.intensities.row(static_cast<Eigen::Index>(p));
+    // Each sampled mask pixel's darkest observation.
+    darkest_.push_back(row.minCoeff());
+    // A camera without a black level clips the negative half of the noise in
+    // its shadows to exact zeros: a shadowed pixel then has zeros and about as
+    // many small positive values, the noise's other half (a half-normal whose
+    // 1 σ quantile is σ). Noise-free data has zeros too, but the values next
+    // to them are the dimmest shading, a sizeable part of the pixel's lit
+    // values; so the partners count as noise only when they sit far below those.
     positive.clear();
     std::size_t zeros = 0;
     for (Eigen::Index j = 0; j < row.size(); ++j) {
@@ -74,41 +74,26 @@ double clipped_noise_sigma(const Observations& observations) {
     }
     if (zeros == 0 || positive.size() < 2 * zeros) continue;
     std::sort(positive.begin(), positive.end());
-    partners.insert(partners.end(), positive.begin(), positive.begin() + static_cast<std::ptrdiff_t>(zeros));
-    lit_medians.push_back(positive[positive.size() / 2]);
+    partners_.insert(partners_.end(), positive.begin(),
+                     positive.begin() + static_cast<std::ptrdiff_t>(zeros));
+    lit_medians_.push_back(positive[positive.size() / 2]);
   }
-  if (partners.size() < kMinClippedSamples) return 0;
-  const double sigma = quantile(partners, kHalfNormalSigmaQuantile);
-  return sigma < kMaxClippedNoiseRatio * quantile(lit_medians, 0.5) ? sigma : 0;
 }
 
-// Every frame's values at a sample of the pixels outside the (dilated) mask.
-std::vector<float> background_values(const ImageStack& stack) {
-  std::vector<float> values;
-  if (stack.mask.empty() || stack.frames.empty()) return values;
-  cv::Mat near_object;
-  cv::dilate(stack.mask, near_object, cv::Mat(), cv::Point(-1, -1), kBackgroundMarginPx);
-  const int outside = static_cast<int>(near_object.total()) - cv::countNonZero(near_object);
-  if (outside <= 0) return values;
-  const int stride = std::max(1, outside / static_cast<int>(kMaxBackgroundPixels));
-  ImageStack background = stack;  // frames share their images
-  background.mask = cv::Mat(stack.mask.size(), CV_8UC1, cv::Scalar::all(0));
-  int seen = 0;
-  for (int y = 0; y < near_object.rows; ++y) {
-    const auto* in = near_object.ptr<std::uint8_t>(y);
-    auto* out = background.mask.ptr<std::uint8_t>(y);
-    for (int x = 0; x < near_object.cols; ++x) {
-      if (in[x] == 0 && seen++ % stride == 0) out[x] = 255;
-    }
-  }
-  const Observations observations = make_observations(background);
-  values.assign(observations.intensities.data(),
-                observations.intensities.data() + observations.intensities.size());
-  return values;
+void ShadowSamples::add_background(const Observations& background) {
+  background_.insert(background_.end(), background.intensities.data(),
+                     background.intensities.data() + background.intensities.size());
 }
 
-ShadowThreshold estimate(const std::vector<float>& darkest, const std::vector<float>& background,
-                         double clipped_sigma, std::string source) {
+ShadowThreshold ShadowSamples::estimate(std::string source) const {
+  const std::vector<float>& darkest = darkest_;
+  const std::vector<float>& background = background_;
+  // The clipped noise's σ; 0 = not found.
+  double clipped_sigma = 0;
+  if (partners_.size() >= kMinClippedSamples) {
+    const double sigma = quantile(partners_, kHalfNormalSigmaQuantile);
+    if (sigma < kMaxClippedNoiseRatio * quantile(lit_medians_, 0.5)) clipped_sigma = sigma;
+  }
   ShadowThreshold t;
   t.source = std::move(source);
   t.object_samples = darkest.size();
@@ -138,16 +123,33 @@ ShadowThreshold estimate(const std::vector<float>& darkest, const std::vector<fl
   return t;
 }
 
-std::string source_of(const ImageStack& stack) {
-  const bool darks =
-      std::any_of(stack.frames.begin(), stack.frames.end(), [](const Frame& f) { return !f.dark.empty(); });
+cv::Mat background_sample_mask(const cv::Mat& mask) {
+  if (mask.empty()) return {};
+  cv::Mat near_object;
+  cv::dilate(mask, near_object, cv::Mat(), cv::Point(-1, -1), kBackgroundMarginPx);
+  const int outside = static_cast<int>(near_object.total()) - cv::countNonZero(near_object);
+  if (outside <= 0) return {};
+  const int stride = std::max(1, outside / static_cast<int>(kMaxBackgroundPixels));
+  cv::Mat sample(mask.size(), CV_8UC1, cv::Scalar::all(0));
+  int seen = 0;
+  for (int y = 0; y < near_object.rows; ++y) {
+    const auto* in = near_object.ptr<std::uint8_t>(y);
+    auto* out = sample.ptr<std::uint8_t>(y);
+    for (int x = 0; x < near_object.cols; ++x) {
+      if (in[x] == 0 && seen++ % stride == 0) out[x] = 255;
+    }
+  }
+  return sample;
+}
+
+std::string shadow_threshold_source(const ImageStack& stack) {
+  const bool darks = std::any_of(stack.frames.begin(), stack.frames.end(),
+                                 [](const Frame& f) { return !f.dark.empty() || !f.dark_file.empty(); });
   if (darks) return "dark frames";
   const bool black =
       std::any_of(stack.frames.begin(), stack.frames.end(), [](const Frame& f) { return f.black_level > 0; });
   return black ? "black level" : "noise floor";
 }
-
-}  // namespace
 
 nlohmann::json ShadowThreshold::to_json() const {
   return {{"value", value},
@@ -164,12 +166,21 @@ std::string ShadowThreshold::describe() const {
 }
 
 ShadowThreshold estimate_shadow_threshold(const ImageStack& stack, const Observations& observations) {
-  return estimate(darkest_observations(observations), background_values(stack),
-                  clipped_noise_sigma(observations), source_of(stack));
+  ShadowSamples samples(observations.pixel_count());
+  samples.add_object(observations);
+  const cv::Mat background = background_sample_mask(stack.mask);
+  if (!background.empty()) {
+    ImageStack sampled = stack;  // frames share their images
+    sampled.mask = background;
+    samples.add_background(make_observations(sampled));
+  }
+  return samples.estimate(shadow_threshold_source(stack));
 }
 
 ShadowThreshold estimate_shadow_threshold(const Observations& observations) {
-  return estimate(darkest_observations(observations), {}, clipped_noise_sigma(observations), "noise floor");
+  ShadowSamples samples(observations.pixel_count());
+  samples.add_object(observations);
+  return samples.estimate("noise floor");
 }
 
 }  // namespace lightstage

@@ -118,29 +118,33 @@ void apply_response(const InverseResponse& response, ImageStack& stack, const st
   }
 }
 
-nlohmann::json linearise_stack(const fs::path& stack_dir, ImageStack& stack, const fs::path& response_file) {
+StackResponse choose_stack_response(const fs::path& stack_dir, const fs::path& response_file) {
   const StackLinearity linearity = read_stack_linearity(stack_dir);
   const fs::path manifest = stack_dir / "manifest.json";
+  StackResponse chosen;
   if (!response_file.empty()) {
     if (linearity.linearised_at_capture)
       fail(
           "{}: radiometry.response_applied: the capture already linearised the frames; solve without "
           "--response {}",
           manifest.string(), response_file.string());
-    const InverseResponse response = InverseResponse::load(response_file);
-    apply_response(response, stack, stack_dir.string());
+    chosen.response = InverseResponse::load(response_file);
     logger("host")->debug("radiometry: frames linearised with {}", response_file.string());
-    return {{"applied", true}, {"source", "file"}, {"file", response_file.string()}, {"linear", true}};
+    chosen.description = {
+        {"applied", true}, {"source", "file"}, {"file", response_file.string()}, {"linear", true}};
+    return chosen;
   }
   if (linearity.linearised_at_capture) {
     logger("host")->debug("radiometry: frames were linearised at capture");
-    return {{"applied", false}, {"source", "capture"}, {"linear", true}};
+    chosen.description = {{"applied", false}, {"source", "capture"}, {"linear", true}};
+    return chosen;
   }
   if (linearity.response) {
-    apply_response(*linearity.response, stack, stack_dir.string());
+    chosen.response = linearity.response;
     logger("host")->debug("radiometry: frames linearised with the response recorded in {}",
                           manifest.string());
-    return {{"applied", true}, {"source", "manifest"}, {"linear", true}};
+    chosen.description = {{"applied", true}, {"source", "manifest"}, {"linear", true}};
+    return chosen;
   }
   if (!linearity.linear) {
     logger("host")->warn(
@@ -149,9 +153,17 @@ nlohmann::json linearise_stack(const fs::path& stack_dir, ImageStack& stack, con
         manifest.string(),
         linearity.sensor_response.empty() ? "radiometry.linear is false"
                                           : "sensor response " + linearity.sensor_response);
-    return {{"applied", false}, {"source", "none"}, {"linear", false}};
+    chosen.description = {{"applied", false}, {"source", "none"}, {"linear", false}};
+    return chosen;
   }
-  return {{"applied", false}, {"source", "none"}, {"linear", true}};
+  chosen.description = {{"applied", false}, {"source", "none"}, {"linear", true}};
+  return chosen;
+}
+
+nlohmann::json linearise_stack(const fs::path& stack_dir, ImageStack& stack, const fs::path& response_file) {
+  const StackResponse chosen = choose_stack_response(stack_dir, response_file);
+  if (chosen.response) apply_response(*chosen.response, stack, stack_dir.string());
+  return chosen.description;
 }
 
 }  // namespace lightstage

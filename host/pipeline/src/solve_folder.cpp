@@ -8,17 +8,21 @@
 #include "lightstage/host/io/stack_io.hpp"
 #include "lightstage/host/report/report.hpp"
 #include "lightstage/host/stack_response.hpp"
+#include "lightstage/pipeline/memory_budget.hpp"
+#include "lightstage/pipeline/solve_bands.hpp"
 #include "lightstage/pipeline/solve_methods.hpp"
 
 #include <fmt/format.h>
 
 namespace lightstage::pipeline {
 
-void write_result_report(const std::filesystem::path& result_dir, const std::filesystem::path& input) {
+void write_result_report(const std::filesystem::path& result_dir, const std::filesystem::path& input,
+                         bool light_statistics) {
   const std::filesystem::path file = result_dir / "report.html";
   try {
     report::ReportOptions options;
     options.stack = input;
+    options.light_statistics = light_statistics;
     const auto written = report::write_report(result_dir, file, options);
     logger("host")->info("report: {} ({:.1f} MB)", written.file.string(),
                          static_cast<double>(written.bytes) / 1e6);
@@ -27,6 +31,31 @@ void write_result_report(const std::filesystem::path& result_dir, const std::fil
     throw Error(fmt::format("{}: report not written ({}); the other results are in {}", file.string(),
                             e.what(), result_dir.string()));
   }
+}
+
+nlohmann::json set_light_model(const std::filesystem::path& input, const ImageStack& stack,
+                               const std::optional<calibration::StackCalibration>& applied,
+                               const SolveCalibration& calibration, Observations& observations, bool warn) {
+  std::string light_model = "distant";
+  std::string why = calibration.distant ? "--distant-lights" : "no LED positions";
+  if (applied && !calibration.distant && calibration::set_near_lights(*applied, observations))
+    light_model = "near (calibration)";
+  if (!calibration.distant && light_model == "distant") {
+    std::string why_not;
+    if (calibration::set_stack_near_lights(input, stack, observations, &why_not)) {
+      light_model = "near (stack)";
+    } else if (why_not.find("has no led_position_mm") == std::string::npos) {
+      // Positions the stack holds yet cannot use change the normals: say so, unless the light was distant.
+      if (warn && why_not.find("distant") == std::string::npos)
+        logger("host")->warn("{}: LED positions not used ({}); solving with distant lights", input.string(),
+                             why_not);
+      why = why_not;
+    }
+  }
+  return {{"model", light_model == "distant" ? "distant" : "near"},
+          {"source", light_model == "near (calibration)" ? "calibration"
+                     : light_model == "near (stack)"     ? "stack"
+                                                         : why}};
 }
 
 SolveInput load_solve_input(const std::filesystem::path& input, const RadiometryOptions& radiometry,
@@ -42,30 +71,12 @@ SolveInput load_solve_input(const std::filesystem::path& input, const Radiometry
   prepared.shadow = estimate_shadow_threshold(stack, prepared.observations);
   prepared.ground_truth = std::move(stack.ground_truth);
   prepared.response = response;
-  std::string light_model = "distant";
-  std::string why = calibration.distant ? "--distant-lights" : "no LED positions";
+  prepared.light_model =
+      set_light_model(input, stack, applied, calibration, prepared.observations, /*warn=*/true);
   if (applied) {
-    const bool near = !calibration.distant && calibration::set_near_lights(*applied, prepared.observations);
-    if (near) light_model = "near (calibration)";
     prepared.calibration = applied->describe();
-    prepared.calibration["near_lights"] = near;
+    prepared.calibration["near_lights"] = prepared.light_model["source"] == "calibration";
   }
-  if (!calibration.distant && light_model == "distant") {
-    std::string why_not;
-    if (calibration::set_stack_near_lights(input, stack, prepared.observations, &why_not)) {
-      light_model = "near (stack)";
-    } else if (why_not.find("has no led_position_mm") == std::string::npos) {
-      // Positions the stack holds yet cannot use change the normals: say so, unless the light was distant.
-      if (why_not.find("distant") == std::string::npos)
-        logger("host")->warn("{}: LED positions not used ({}); solving with distant lights", input.string(),
-                             why_not);
-      why = why_not;
-    }
-  }
-  prepared.light_model = {{"model", light_model == "distant" ? "distant" : "near"},
-                          {"source", light_model == "near (calibration)" ? "calibration"
-                                     : light_model == "near (stack)"     ? "stack"
-                                                                         : why}};
   return prepared;
 }
 
@@ -103,11 +114,27 @@ SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOpt
 }
 
 SolveReport solve_folder(const std::filesystem::path& input, const SolveSettings& settings,
-                         const std::filesystem::path& out, const SolveCalibration& calibration) {
+                         const std::filesystem::path& out, const SolveCalibration& calibration,
+                         const ProgressStart& progress) {
+  io::require_separate_output(out, {input});
+  const BandPlan plan = plan_bands(io::read_stack_outline(input), parse_memory_limit(settings.memory_limit));
+  if (plan.bands > 1) {
+    io::StackBands stack(input);
+    SolveSettings banded = settings;
+    if (progress) {
+      const cv::Mat& mask = stack.index().mask;
+      const auto pixels =
+          static_cast<std::size_t>(mask.empty() ? stack.size().area() : cv::countNonZero(mask));
+      banded.set_progress(progress(solve_work(settings, pixels)));
+    }
+    return solve_folder_in_bands(input, banded, out, calibration, stack, plan);
+  }
   return solve_folder(
       input, settings.radiometry,
-      [&settings](const SolveInput& prepared) {
-        return solve_with(prepared.observations, settings, prepared.shadow);
+      [&settings, &progress](const SolveInput& prepared) {
+        SolveSettings chosen = settings;
+        if (progress) chosen.set_progress(progress(solve_work(settings, prepared.observations)));
+        return solve_with(prepared.observations, chosen, prepared.shadow);
       },
       out, calibration);
 }

@@ -90,34 +90,39 @@ void register_solve_method(SolveMethod method) {
   registry().push_back(std::move(method));
 }
 
-SolveResult solve_with(const Observations& observations, const SolveSettings& settings,
-                       const ShadowThreshold& data_threshold) {
+SolvePlan plan_solve(const Observations& observations, const SolveSettings& settings,
+                     const ShadowThreshold& data_threshold) {
+  find_solve_method(settings.method);
+  SolvePlan plan;
+  plan.settings = settings;
+  plan.threshold = data_threshold;
+  if (settings.method != "shape-prior")
+    check_light_rank(observations);  // shape-prior estimates its own lighting
+  if (settings.shadow_threshold) {
+    plan.threshold = ShadowThreshold{};
+    plan.threshold.value = *settings.shadow_threshold;
+    plan.threshold.source = "flag";
+  } else {
+    plan.settings.use_data_shadow_threshold(plan.threshold.value);
+  }
+  plan.warnings = method_warnings(settings.method, observations);
+  for (const auto& warning : plan.warnings) logger("host")->warn("{}", warning);
+  return plan;
+}
+
+SolveResult solve_planned(const Observations& observations, const SolvePlan& plan, bool refit_relighting) {
+  const SolveSettings& settings = plan.settings;
   const SolveMethod& method = find_solve_method(settings.method);
   const bool shape_prior = settings.method == "shape-prior";
-  if (!shape_prior) check_light_rank(observations);  // shape-prior estimates its own lighting
-  ShadowThreshold used = data_threshold;
-  SolveSettings chosen = settings;
-  if (settings.shadow_threshold) {
-    used = ShadowThreshold{};
-    used.value = *settings.shadow_threshold;
-    used.source = "flag";
-  } else {
-    chosen.use_data_shadow_threshold(used.value);
-  }
-  const std::vector<std::string> warnings = method_warnings(settings.method, observations);
-  for (const auto& warning : warnings) logger("host")->warn("{}", warning);
-  SolveResult result = method.solve(observations, chosen);
+  const ShadowThreshold& used = plan.threshold;
+  SolveResult result = method.solve(observations, settings);
   nlohmann::json threshold = used.to_json();
   threshold["used_by_l2"] = settings.method == "l2" ? settings.shadow_threshold.has_value() : false;
   result.parameters["shadow_threshold_choice"] = threshold;
-  if (!warnings.empty()) result.parameters["warnings"] = warnings;
+  if (!plan.warnings.empty()) result.parameters["warnings"] = plan.warnings;
   // A perspective shape prior sees surfaces whose normals have z < 0; an orthographic camera does not.
   if (!(shape_prior && !settings.shape_prior.intrinsics.empty())) {
-    const std::size_t facing_away = clamp_facing_away(result);
-    result.summary.findings.push_back(
-        {"normals_facing_away", facing_away,
-         facing_away == 0 ? std::string{}
-                          : fmt::format("{} normals facing away clamped to the horizon", facing_away)});
+    result.summary.findings.push_back(facing_away_fact(clamp_facing_away(result)));
     result.summary.message = result.summary.format_message();
   }
   // One confidence for every method with known lights, from the same
@@ -133,8 +138,7 @@ SolveResult solve_with(const Observations& observations, const SolveSettings& se
   if (observations.chroma.rows() > 0) result.chroma = chroma_image(observations, result.solved);
   // A per-pixel BRDF is refitted to every lit observation at the answer's
   // normal, for relighting (reflectance/relighting_fit.hpp).
-  if (!result.coefficients.empty() && result.reflectance.is_object() &&
-      result.reflectance.value("model", "") == "bipolynomial") {
+  if (refit_relighting && refits_relighting(result)) {
     RelightingFitOptions refit;
     refit.order = result.reflectance.at("order").get<int>();
     refit.shadow_threshold = std::max(0.0, used.value);
@@ -151,18 +155,37 @@ SolveResult solve_with(const Observations& observations, const SolveSettings& se
   return result;
 }
 
+bool refits_relighting(const SolveResult& result) {
+  return !result.coefficients.empty() && result.reflectance.is_object() &&
+         result.reflectance.value("model", "") == "bipolynomial";
+}
+
+SolveFact facing_away_fact(std::size_t count) {
+  return {"normals_facing_away", count,
+          count == 0 ? std::string{} : fmt::format("{} normals facing away clamped to the horizon", count)};
+}
+
+SolveResult solve_with(const Observations& observations, const SolveSettings& settings,
+                       const ShadowThreshold& data_threshold) {
+  return solve_planned(observations, plan_solve(observations, settings, data_threshold));
+}
+
 SolveResult solve_with(const Observations& observations, const SolveSettings& settings) {
   return solve_with(observations, settings,
                     settings.shadow_threshold ? ShadowThreshold{} : estimate_shadow_threshold(observations));
 }
 
 SolveWork solve_work(const SolveSettings& settings, const Observations& observations) {
+  return solve_work(settings, observations.pixel_count());
+}
+
+SolveWork solve_work(const SolveSettings& settings, std::size_t pixels) {
   if (settings.method == "shape-prior") {
     const auto& o = settings.shape_prior.options;
     return {"evaluations", o.refine ? static_cast<std::size_t>(o.max_evaluations) : 0};
   }
   const std::size_t passes = settings.method == "monotonic" && settings.azimuth_from != "isotropy" ? 2 : 1;
-  return {"px", observations.pixel_count() * passes};
+  return {"px", pixels * passes};
 }
 
 }  // namespace lightstage::pipeline

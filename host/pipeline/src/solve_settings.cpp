@@ -1,5 +1,7 @@
 #include "lightstage/pipeline/solve_settings.hpp"
 
+#include "lightstage/pipeline/memory_budget.hpp"
+
 #include "lightstage/common/error.hpp"
 #include "lightstage/pipeline/solve_methods.hpp"
 
@@ -32,6 +34,7 @@ void SolveSettings::use_data_shadow_threshold(double value) {
 
 void SolveSettings::resolve() {
   find_solve_method(method);  // names the known methods when unknown
+  parse_memory_limit(memory_limit);
   radiometry.clamp_to_one = !no_clamp;
   robust.estimator = parse_robust_estimator(estimator);
   robust.screen_cast_shadows = shadow_screen;

@@ -144,14 +144,14 @@ bool set_near_lights(const StackCalibration& calibration, Observations& observat
   const LightCalibration& cal = calibration.calibration;
   if (!cal.has_positions()) return false;
   CameraGeometry camera = calibration.stack_camera.value_or(cal.camera);
-  if (!calibration.stack_camera &&
-      (cal.camera.width != observations.size.width || cal.camera.height != observations.size.height)) {
+  if (!calibration.stack_camera && (cal.camera.width != observations.image_size().width ||
+                                    cal.camera.height != observations.image_size().height)) {
     fail(
         "{}: the calibration's camera is {}x{}, the stack's images are {}x{}, and the stack records no "
         "camera: "
         "cannot place its pixels for near lights (solve with --distant-lights)",
-        calibration.file.string(), cal.camera.width, cal.camera.height, observations.size.width,
-        observations.size.height);
+        calibration.file.string(), cal.camera.width, cal.camera.height, observations.image_size().width,
+        observations.image_size().height);
   }
   if (!camera.metric)
     fail(
@@ -170,7 +170,7 @@ bool set_near_lights(const StackCalibration& calibration, Observations& observat
       [&camera](const Eigen::Vector2d& uv, Eigen::Vector3d* origin, Eigen::Vector3d* direction) {
         camera.ray(uv, origin, direction);
       },
-      plane_z_mm.value_or(cal.object_position_mm.z()));
+      plane_z_mm.value_or(cal.object_position_mm.z()), observations.origin);
   observations.near = std::move(near);
   return true;
 }
@@ -232,7 +232,7 @@ bool set_stack_near_lights(const fs::path& stack_dir, const ImageStack& stack, O
       [&camera](const Eigen::Vector2d& uv, Eigen::Vector3d* origin, Eigen::Vector3d* direction) {
         camera->ray(uv, origin, direction);
       },
-      near.object_centre_mm.z());
+      near.object_centre_mm.z(), observations.origin);
   observations.near = std::move(near);
   return true;
 }

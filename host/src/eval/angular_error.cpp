@@ -43,7 +43,9 @@ nlohmann::json AngularErrorStats::to_json() const {
           {"max_deg", max},   {"count", count},       {"missing", missing}};
 }
 
-AngularErrorMap angular_error(const cv::Mat& predicted, const cv::Mat& truth, const cv::Mat& mask) {
+namespace {
+
+void check_maps(const cv::Mat& predicted, const cv::Mat& truth, const cv::Mat& mask) {
   if (predicted.type() != CV_32FC3 || truth.type() != CV_32FC3) {
     fail("angular_error: normal maps must be CV_32FC3, got types {} and {}", predicted.type(), truth.type());
   }
@@ -55,11 +57,13 @@ AngularErrorMap angular_error(const cv::Mat& predicted, const cv::Mat& truth, co
     fail("angular_error: mask must be CV_8UC1 of {}x{}, got type {} of {}x{}", truth.cols, truth.rows,
          mask.type(), mask.cols, mask.rows);
   }
-  AngularErrorMap result;
-  result.degrees = cv::Mat(truth.size(), CV_32FC1, cv::Scalar::all(0));
-  result.valid = cv::Mat(truth.size(), CV_8UC1, cv::Scalar::all(0));
-  std::vector<double> errors;
-  double sum = 0;
+}
+
+}  // namespace
+
+void AngularErrorAccumulator::add(const cv::Mat& predicted, const cv::Mat& truth, const cv::Mat& mask,
+                                  AngularErrorMap* map) {
+  check_maps(predicted, truth, mask);
   for (int y = 0; y < truth.rows; ++y) {
     for (int x = 0; x < truth.cols; ++x) {
       if (!mask.empty() && mask.at<std::uint8_t>(y, x) == 0) continue;
@@ -67,25 +71,43 @@ AngularErrorMap angular_error(const cv::Mat& predicted, const cv::Mat& truth, co
       if (!present(t)) continue;
       const cv::Vec3f& p = predicted.at<cv::Vec3f>(y, x);
       if (!present(p)) {
-        ++result.stats.missing;
+        ++missing_;
         continue;
       }
       const double angle = angle_between_deg(Vec3(p[0], p[1], p[2]), Vec3(t[0], t[1], t[2]));
-      result.degrees.at<float>(y, x) = static_cast<float>(angle);
-      result.valid.at<std::uint8_t>(y, x) = 255;
-      errors.push_back(angle);
-      sum += angle;
+      if (map != nullptr) {
+        map->degrees.at<float>(y, x) = static_cast<float>(angle);
+        map->valid.at<std::uint8_t>(y, x) = 255;
+      }
+      errors_.push_back(angle);
+      sum_ += angle;
     }
   }
-  AngularErrorStats& stats = result.stats;
-  stats.count = errors.size();
-  if (!errors.empty()) {
+}
+
+AngularErrorStats AngularErrorAccumulator::stats() const {
+  AngularErrorStats stats;
+  stats.missing = missing_;
+  stats.count = errors_.size();
+  if (!errors_.empty()) {
+    std::vector<double> errors = errors_;
     std::sort(errors.begin(), errors.end());
-    stats.mean = sum / static_cast<double>(errors.size());
+    stats.mean = sum_ / static_cast<double>(errors.size());
     stats.median = percentile(errors, 0.5);
     stats.p90 = percentile(errors, 0.9);
     stats.max = errors.back();
   }
+  return stats;
+}
+
+AngularErrorMap angular_error(const cv::Mat& predicted, const cv::Mat& truth, const cv::Mat& mask) {
+  check_maps(predicted, truth, mask);
+  AngularErrorMap result;
+  result.degrees = cv::Mat(truth.size(), CV_32FC1, cv::Scalar::all(0));
+  result.valid = cv::Mat(truth.size(), CV_8UC1, cv::Scalar::all(0));
+  AngularErrorAccumulator accumulator;
+  accumulator.add(predicted, truth, mask, &result);
+  result.stats = accumulator.stats();
   return result;
 }
 

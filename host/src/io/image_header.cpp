@@ -32,7 +32,10 @@ ImageHeader png_header(const std::filesystem::path& path, const std::string& byt
   if (bytes.size() < 24 || bytes.compare(12, 4, "IHDR") != 0) {
     fail("{}: not a readable image (truncated or malformed PNG header)", path.string());
   }
-  const ImageHeader header{big_endian(bytes, 16), big_endian(bytes, 20)};
+  // Bit depth and colour type follow; read_image gives 8 or 16 bits, grey or BGR (palette, alpha: BGR).
+  const int depth_bytes = bytes.size() > 24 && bytes[24] == 16 ? 2 : 1;
+  const int channels = bytes.size() > 25 && (bytes[25] & 0x6) != 0 ? 3 : 1;
+  const ImageHeader header{big_endian(bytes, 16), big_endian(bytes, 20), depth_bytes * channels};
   if (header.width == 0 || header.height == 0 || header.width > 0x7fffffff || header.height > 0x7fffffff) {
     fail("{}: not a readable image (PNG header declares {}x{})", path.string(), header.width, header.height);
   }
@@ -53,7 +56,7 @@ ImageHeader read_image_header(const std::filesystem::path& path) {
 
   if (lower_extension(path) == ".pfm") {
     const PfmHeader pfm = parse_pfm_header(path, bytes);
-    return {pfm.width, pfm.height};
+    return {pfm.width, pfm.height, pfm.channels * 4};
   }
   if (is_raw_file(path) || is_tiff_file(path)) {
     const cv::Size size = is_raw_file(path) ? read_raw_size(path) : read_tiff_size(path);

@@ -14,6 +14,7 @@ namespace lightstage::io {
 struct ImageHeader {
   std::int64_t width = 0;
   std::int64_t height = 0;
+  int pixel_bytes = 0;  // a pixel decoded (read_image), when the header says: PNG and PFM; 0 = unknown
 };
 
 // Throws InputError naming the file when it is missing, is none of those, or

@@ -61,7 +61,16 @@ void check_declared_size(const std::filesystem::path& path, const ImageHeader& f
   }
 }
 
-void check_finite_pixels(const std::filesystem::path& path, const cv::Mat& image) {
+std::string image_type_text(int type) {
+  const int depth = CV_MAT_DEPTH(type);
+  return fmt::format("{} {}",
+                     depth == CV_8U    ? "8-bit"
+                     : depth == CV_16U ? "16-bit"
+                                       : "float",
+                     CV_MAT_CN(type) == 1 ? "grey" : "RGB");
+}
+
+void check_finite_pixels(const std::filesystem::path& path, const cv::Mat& image, int first_row) {
   if (image.depth() != CV_32F) return;
   const int values = image.cols * image.channels();
   for (int y = 0; y < image.rows; ++y) {
@@ -69,7 +78,7 @@ void check_finite_pixels(const std::filesystem::path& path, const cv::Mat& image
     for (int v = 0; v < values; ++v) {
       if (!std::isfinite(row[v])) {
         fail("{}: pixel ({}, {}) is {}; stack images must hold finite values", path.string(),
-             v / image.channels(), y,
+             v / image.channels(), first_row + y,
              std::isnan(row[v]) ? "NaN"
              : row[v] > 0       ? "+Inf"
                                 : "-Inf");

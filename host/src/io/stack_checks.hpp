@@ -32,7 +32,11 @@ ImageHeader check_frame_headers(const std::filesystem::path& dir, const std::vec
 void check_declared_size(const std::filesystem::path& path, const ImageHeader& frames,
                          const std::string& what);
 
-// Refuses a float image holding NaN or infinity, naming the first such pixel (x, y).
-void check_finite_pixels(const std::filesystem::path& path, const cv::Mat& image);
+// Refuses a float image holding NaN or infinity, naming the first such pixel
+// (x, y); `image` may be a band whose row 0 is row `first_row` of the file.
+void check_finite_pixels(const std::filesystem::path& path, const cv::Mat& image, int first_row = 0);
+
+// "16-bit RGB", "float grey", ... for an image of OpenCV type `type`.
+std::string image_type_text(int type);
 
 }  // namespace lightstage::io

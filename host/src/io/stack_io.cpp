@@ -1,6 +1,7 @@
 #include "lightstage/host/io/stack_io.hpp"
 
 #include "io/stack_checks.hpp"
+#include "io/stack_index.hpp"
 #include "io/stack_manifest.hpp"
 #include "io/text_table.hpp"
 #include "lightstage/common/error.hpp"
@@ -15,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <string>
 #include <system_error>
 #include <utility>
@@ -32,10 +34,7 @@ bool file_exists(const fs::path& path) {
 
 std::string size_text(const cv::Mat& image) { return fmt::format("{}x{}", image.cols, image.rows); }
 
-std::string type_text(const cv::Mat& image) {
-  const char* depth = image.depth() == CV_8U ? "8-bit" : image.depth() == CV_16U ? "16-bit" : "float";
-  return fmt::format("{} {}", depth, image.channels() == 1 ? "grey" : "RGB");
-}
+std::string type_text(const cv::Mat& image) { return image_type_text(image.type()); }
 
 std::string default_frame_name(std::size_t index, const cv::Mat& image) {
   return fmt::format("{:03}.{}", index + 1, image.depth() == CV_32F ? "pfm" : "png");
@@ -145,7 +144,7 @@ void LoadOptions::check() const {
   if (threads < 0) fail("LoadOptions.threads: must be 0 (automatic) or positive, got {}", threads);
 }
 
-ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
+StackIndex read_stack_index(const fs::path& dir, const LoadOptions& options) {
   options.check();
   std::error_code error;
   if (!fs::exists(dir, error)) fail("{}: no such stack folder", dir.string());
@@ -206,28 +205,60 @@ ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
   std::vector<std::string> files;
   for (const auto& frame : stack.frames) files.push_back(frame.filename);
   const nlohmann::json manifest = use_manifest ? read_manifest_json(manifest_path) : nlohmann::json();
-  const ImageHeader declared = check_frame_headers(
+  StackIndex index;
+  index.declared = check_frame_headers(
       dir, files, use_manifest ? manifest_image_size(manifest_path, manifest) : std::nullopt, manifest_path);
-  parallel_chunks(names.size(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      const fs::path path = dir / stack.frames[i].filename;
-      stack.frames[i].image = read_image(path);
-      check_finite_pixels(path, stack.frames[i].image);
-    }
-  });
-  const cv::Mat& first = stack.frames.front().image;
+  if (use_manifest) {
+    apply_manifest(manifest_path, manifest, stack);
+    index.manifest_path = manifest_path;
+  }
+  index.stack = std::move(stack);
+  return index;
+}
+
+StackOutline read_stack_outline(const fs::path& dir, const LoadOptions& options) {
+  const StackIndex index = read_stack_index(dir, options);
+  StackOutline outline;
+  outline.size = {static_cast<int>(index.declared.width), static_cast<int>(index.declared.height)};
+  outline.images = index.stack.frames.size();
+  outline.pixel_bytes = index.declared.pixel_bytes;
+  std::set<std::string> darks;
+  for (const Frame& frame : index.stack.frames)
+    if (!frame.dark_file.empty()) darks.insert(frame.dark_file);
+  outline.dark_files = darks.size();
+  return outline;
+}
+
+ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
+  StackIndex index = read_stack_index(dir, options);
+  ImageStack& stack = index.stack;
+  const ImageHeader& declared = index.declared;
+  const std::size_t count = stack.frames.size();
+  const cv::Size declared_size(static_cast<int>(declared.width), static_cast<int>(declared.height));
   const fs::path first_path = dir / stack.frames.front().filename;
-  for (const auto& frame : stack.frames) {
-    const fs::path path = dir / frame.filename;
-    if (frame.image.size() != first.size()) {
-      fail("{}: image is {}, but {} is {}", path.string(), size_text(frame.image),
-           first_path.filename().string(), size_text(first));
-    }
-    if (frame.image.type() != first.type()) {
-      fail("{}: image is {}, but {} is {}", path.string(), type_text(frame.image),
-           first_path.filename().string(), type_text(first));
+  if (options.frame_pixels) {
+    parallel_chunks(count, options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        const fs::path path = dir / stack.frames[i].filename;
+        stack.frames[i].image = read_image(path);
+        check_finite_pixels(path, stack.frames[i].image);
+      }
+    });
+    const cv::Mat& image0 = stack.frames.front().image;
+    for (const auto& frame : stack.frames) {
+      const fs::path path = dir / frame.filename;
+      if (frame.image.size() != image0.size()) {
+        fail("{}: image is {}, but {} is {}", path.string(), size_text(frame.image),
+             first_path.filename().string(), size_text(image0));
+      }
+      if (frame.image.type() != image0.type()) {
+        fail("{}: image is {}, but {} is {}", path.string(), type_text(frame.image),
+             first_path.filename().string(), type_text(image0));
+      }
     }
   }
+  // Without frame pixels, the size every header declared stands for the images'.
+  const cv::Mat first = options.frame_pixels ? stack.frames.front().image : cv::Mat(declared_size, CV_8UC1);
 
   const fs::path mask_path = dir / "mask.png";
   if (file_exists(mask_path)) {
@@ -262,11 +293,9 @@ ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
     if (!truth.normals.empty() || !truth.depth.empty()) stack.ground_truth = std::move(truth);
   }
 
-  if (use_manifest) {
-    apply_manifest(manifest_path, manifest, stack);
-    load_darks(dir, manifest_path, declared, stack);
-  }
-  return stack;
+  if (!index.manifest_path.empty() && options.frame_pixels)
+    load_darks(dir, index.manifest_path, declared, stack);
+  return std::move(index.stack);
 }
 
 void write_stack(const fs::path& dir, const ImageStack& stack, const nlohmann::json& extra_manifest,

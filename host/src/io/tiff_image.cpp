@@ -1,6 +1,7 @@
 #include "lightstage/host/io/tiff_image.hpp"
 
 #include "io/file_extension.hpp"
+#include "io/row_readers.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/stack_io.hpp"
 
@@ -159,57 +160,109 @@ void copy_pixels(const Layout& layout, const std::uint8_t* in, int count, int sa
   }
 }
 
-void read_strips(const TiffFile& file, const Layout& layout, cv::Mat& out) {
-  const tmsize_t size = TIFFScanlineSize(file.get());
-  const std::size_t needed =
-      static_cast<std::size_t>(layout.width) * (layout.planar ? 1 : layout.samples) * layout.bytes;
-  if (size <= 0 || static_cast<std::size_t>(size) < needed)
-    file.fail_here("scanline size does not fit the image");
-  std::vector<std::uint8_t> line(static_cast<std::size_t>(size));
-  const int planes = layout.planar ? std::min(layout.samples, layout.channels) : 1;
-  for (int plane = 0; plane < planes; ++plane) {
-    for (int y = 0; y < layout.height; ++y) {
-      if (TIFFReadScanline(file.get(), line.data(), static_cast<std::uint32_t>(y),
-                           static_cast<std::uint16_t>(plane)) != 1)
-        file.fail_here(fmt::format("cannot read row {}", y));
-      copy_pixels(layout, line.data(), layout.width, plane, out.ptr<std::uint8_t>(y));
+// A TIFF's rows a block at a time: a strip, or a row of tiles, decoded once
+// (every sample plane) into rows of the output type and kept until a band
+// needs the next block.
+class TiffRows final : public RowReader {
+ public:
+  explicit TiffRows(const std::filesystem::path& path) : TiffRows(path, std::make_unique<TiffFile>(path)) {}
+
+ private:
+  // `file` is moved from only after its layout is read.
+  TiffRows(const std::filesystem::path& path, std::unique_ptr<TiffFile>&& file)
+      : TiffRows(path, layout_of(*file), std::move(file)) {}
+  TiffRows(const std::filesystem::path& path, const Layout& layout, std::unique_ptr<TiffFile>&& file)
+      : RowReader(path, {layout.width, layout.height}, CV_MAKETYPE(layout.cv_depth, layout.channels)),
+        file_(std::move(file)),
+        layout_(layout) {
+    tiled_ = TIFFIsTiled(file_->get()) != 0;
+    if (tiled_) {
+      tile_width_ = static_cast<int>(file_->field<std::uint32_t>(TIFFTAG_TILEWIDTH, "TileWidth"));
+      block_rows_ = static_cast<int>(file_->field<std::uint32_t>(TIFFTAG_TILELENGTH, "TileLength"));
+      const tmsize_t size = TIFFTileSize(file_->get());
+      const std::size_t needed = static_cast<std::size_t>(tile_width_) *
+                                 static_cast<std::size_t>(block_rows_) *
+                                 (layout_.planar ? 1 : layout_.samples) * layout_.bytes;
+      // A tile larger than the image (rounded up to libtiff's multiple of 16) only costs memory.
+      const auto round_up = [](int side) { return (side + 15) / 16 * 16; };
+      if (tile_width_ <= 0 || block_rows_ <= 0 || tile_width_ > round_up(layout_.width) ||
+          block_rows_ > round_up(layout_.height) || size <= 0 || static_cast<std::size_t>(size) < needed ||
+          size > kMaxTiffAllocation)
+        file_->fail_here(fmt::format("tiles of {}x{} do not fit a {}x{} image", tile_width_, block_rows_,
+                                     layout_.width, layout_.height));
+      buffer_.resize(static_cast<std::size_t>(size));
+      unit_row_bytes_ = needed / static_cast<std::size_t>(block_rows_);
+    } else {
+      const auto rows_per_strip = file_->field_or_default<std::uint32_t>(TIFFTAG_ROWSPERSTRIP);
+      block_rows_ = static_cast<int>(std::min<std::uint32_t>(rows_per_strip == 0 ? 1 : rows_per_strip,
+                                                             static_cast<std::uint32_t>(layout_.height)));
+      const tmsize_t line = TIFFScanlineSize(file_->get());
+      unit_row_bytes_ =
+          static_cast<std::size_t>(layout_.width) * (layout_.planar ? 1 : layout_.samples) * layout_.bytes;
+      if (line <= 0 || static_cast<std::size_t>(line) < unit_row_bytes_ ||
+          static_cast<std::size_t>(line) * static_cast<std::size_t>(block_rows_) >
+              static_cast<std::size_t>(kMaxTiffAllocation))
+        file_->fail_here("scanline size does not fit the image");
+      unit_row_bytes_ = static_cast<std::size_t>(line);
+      buffer_.resize(unit_row_bytes_ * static_cast<std::size_t>(block_rows_));
     }
   }
-}
 
-void read_tiles(const TiffFile& file, const Layout& layout, cv::Mat& out) {
-  const auto tile_width = static_cast<int>(file.field<std::uint32_t>(TIFFTAG_TILEWIDTH, "TileWidth"));
-  const auto tile_height = static_cast<int>(file.field<std::uint32_t>(TIFFTAG_TILELENGTH, "TileLength"));
-  const tmsize_t size = TIFFTileSize(file.get());
-  const std::size_t needed = static_cast<std::size_t>(tile_width) * static_cast<std::size_t>(tile_height) *
-                             (layout.planar ? 1 : layout.samples) * layout.bytes;
-  // A tile larger than the image (rounded up to libtiff's multiple of 16) only costs memory.
-  const auto round_up = [](int side) { return (side + 15) / 16 * 16; };
-  if (tile_width <= 0 || tile_height <= 0 || tile_width > round_up(layout.width) ||
-      tile_height > round_up(layout.height) || size <= 0 || static_cast<std::size_t>(size) < needed ||
-      size > kMaxTiffAllocation)
-    file.fail_here(fmt::format("tiles of {}x{} do not fit a {}x{} image", tile_width, tile_height,
-                               layout.width, layout.height));
-  std::vector<std::uint8_t> tile(static_cast<std::size_t>(size));
-  const std::size_t tile_row = needed / static_cast<std::size_t>(tile_height);
-  const int planes = layout.planar ? std::min(layout.samples, layout.channels) : 1;
-  for (int plane = 0; plane < planes; ++plane) {
-    for (int y0 = 0; y0 < layout.height; y0 += tile_height) {
-      for (int x0 = 0; x0 < layout.width; x0 += tile_width) {
-        if (TIFFReadTile(file.get(), tile.data(), static_cast<std::uint32_t>(x0),
-                         static_cast<std::uint32_t>(y0), 0, static_cast<std::uint16_t>(plane)) < 0)
-          file.fail_here(fmt::format("cannot read the tile at ({}, {})", x0, y0));
-        const int rows = std::min(tile_height, layout.height - y0);
-        const int cols = std::min(tile_width, layout.width - x0);
-        for (int r = 0; r < rows; ++r) {
-          std::uint8_t* row =
-              out.ptr<std::uint8_t>(y0 + r) + static_cast<std::size_t>(x0) * layout.channels * layout.bytes;
-          copy_pixels(layout, tile.data() + static_cast<std::size_t>(r) * tile_row, cols, plane, row);
+  void read_rows(int y0, int rows, cv::Mat& out) override {
+    for (int y = y0; y < y0 + rows;) {
+      const int block = y / block_rows_;
+      if (block != block_index_) decode_block(block);
+      const int first = block * block_rows_;
+      const int end = std::min(y0 + rows, first + block_.rows);
+      block_.rowRange(y - first, end - first).copyTo(out.rowRange(y - y0, end - y0));
+      y = end;
+    }
+  }
+
+  void decode_block(int block) {
+    const int first = block * block_rows_;
+    const int rows = std::min(block_rows_, layout_.height - first);
+    block_.create(rows, layout_.width, type());
+    block_index_ = -1;
+    const int planes = layout_.planar ? std::min(layout_.samples, layout_.channels) : 1;
+    for (int plane = 0; plane < planes; ++plane) {
+      if (tiled_) {
+        for (int x0 = 0; x0 < layout_.width; x0 += tile_width_) {
+          if (TIFFReadTile(file_->get(), buffer_.data(), static_cast<std::uint32_t>(x0),
+                           static_cast<std::uint32_t>(first), 0, static_cast<std::uint16_t>(plane)) < 0)
+            file_->fail_here(fmt::format("cannot read the tile at ({}, {})", x0, first));
+          const int cols = std::min(tile_width_, layout_.width - x0);
+          for (int r = 0; r < rows; ++r)
+            copy_pixels(layout_, buffer_.data() + static_cast<std::size_t>(r) * unit_row_bytes_, cols, plane,
+                        block_.ptr<std::uint8_t>(r) +
+                            static_cast<std::size_t>(x0) * layout_.channels * layout_.bytes);
         }
+      } else {
+        const tstrip_t strips_per_plane =
+            TIFFNumberOfStrips(file_->get()) / static_cast<tstrip_t>(layout_.planar ? layout_.samples : 1);
+        const auto strip = static_cast<tstrip_t>(plane) * strips_per_plane + static_cast<tstrip_t>(block);
+        const tmsize_t wanted = static_cast<tmsize_t>(unit_row_bytes_) * rows;
+        if (static_cast<tstrip_t>(block) >= strips_per_plane ||
+            TIFFReadEncodedStrip(file_->get(), strip, buffer_.data(), wanted) < wanted)
+          file_->fail_here(fmt::format("cannot read rows {} to {}", first, first + rows - 1));
+        for (int r = 0; r < rows; ++r)
+          copy_pixels(layout_, buffer_.data() + static_cast<std::size_t>(r) * unit_row_bytes_, layout_.width,
+                      plane, block_.ptr<std::uint8_t>(r));
       }
     }
+    block_index_ = block;
   }
-}
+
+  std::unique_ptr<TiffFile> file_;
+  Layout layout_;
+  bool tiled_ = false;
+  int tile_width_ = 0;
+  int block_rows_ = 1;
+  std::size_t unit_row_bytes_ = 0;  // bytes of one row of a strip or tile, as libtiff decodes it
+  std::vector<std::uint8_t> buffer_;
+  cv::Mat block_;
+  int block_index_ = -1;
+};
 
 }  // namespace
 
@@ -220,20 +273,24 @@ bool is_tiff_file(const std::filesystem::path& path) {
 
 cv::Mat read_tiff(const std::filesystem::path& path) {
   try {
-    const TiffFile file(path);
-    const Layout layout = layout_of(file);
-    cv::Mat out(layout.height, layout.width, CV_MAKETYPE(layout.cv_depth, layout.channels));
-    if (TIFFIsTiled(file.get()))
-      read_tiles(file, layout, out);
-    else
-      read_strips(file, layout, out);
-    if (layout.cv_depth == CV_32F && !cv::checkRange(out))
+    TiffRows rows(path);
+    cv::Mat out;
+    rows.read(0, rows.size().height, out);
+    if (out.depth() == CV_32F && !cv::checkRange(out))
       fail("{}: float samples hold NaN or infinity", path.string());
     return out;
   } catch (const std::bad_alloc&) {
     fail("{}: too large to decode in the memory available", path.string());
   } catch (const cv::Exception& e) {
     fail("{}: cannot decode ({})", path.string(), e.what());
+  }
+}
+
+std::unique_ptr<RowReader> open_tiff_rows(const std::filesystem::path& path) {
+  try {
+    return std::make_unique<TiffRows>(path);
+  } catch (const std::bad_alloc&) {
+    fail("{}: too large to decode in the memory available", path.string());
   }
 }
 

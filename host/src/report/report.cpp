@@ -131,6 +131,7 @@ void load_inputs(Inputs& in, const io::SolveFolder& folder, const ReportOptions&
   if (in.stack_dir) {
     io::LoadOptions load;
     load.min_images = 1;
+    load.frame_pixels = options.light_statistics;  // only the statistics need the frames' pixels
     try {
       in.stack = io::load_stack(*in.stack_dir, load);
     } catch (const InputError& e) {

@@ -105,19 +105,23 @@ std::optional<FalloffPixelFit> fit_falloff_pixel(const PixelObservations& pixel,
   return fit;
 }
 
-FalloffEstimate estimate_incidence_falloff(const Observations& observations,
-                                           const BiPolynomialOptions& options, std::size_t max_pixels) {
+FalloffSamples::FalloffSamples(std::size_t total_pixels, std::size_t max_pixels) {
+  const std::size_t most = max_pixels == 0 ? total_pixels : max_pixels;  // 0: every pixel
+  stride_ = most == 0 ? 1 : std::max<std::size_t>(1, total_pixels / most + (total_pixels % most != 0));
+}
+
+void FalloffSamples::add(const Observations& observations, const BiPolynomialOptions& options) {
   check_observations(observations, "incidence fall-off");
   const std::size_t pixels = observations.pixel_count();
-  const std::size_t most = max_pixels == 0 ? pixels : max_pixels;  // 0: every pixel
-  const std::size_t stride = most == 0 ? 1 : std::max<std::size_t>(1, pixels / most + (pixels % most != 0));
-  const std::size_t samples = (pixels + stride - 1) / stride;
+  // The first of these pixels on the whole image's stride (Observations::first_pixel).
+  const std::size_t first = (stride_ - observations.first_pixel % stride_) % stride_;
+  const std::size_t samples = first >= pixels ? 0 : (pixels - first + stride_ - 1) / stride_;
   std::vector<double> kappas(samples, std::numeric_limits<double>::quiet_NaN());
   parallel_chunks(samples, options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     PixelObservations pixel;
     BiPolynomialWorkspace ws;
     for (std::size_t s = begin; s < end; ++s) {
-      load_pixel(observations, s * stride, options.drop_saturated, pixel);
+      load_pixel(observations, first + s * stride_, options.drop_saturated, pixel);
       if (!select_low_frequency(pixel, options, ws) || ws.kept.size() < kMinFalloffObservations) continue;
       Eigen::Vector3d lambert;
       if (!detail::lambert_fit(pixel.lights, pixel.values, ws.kept, lambert) || lambert.norm() < 1e-12)
@@ -126,7 +130,12 @@ FalloffEstimate estimate_incidence_falloff(const Observations& observations,
       if (fit) kappas[s] = fit->kappa;
     }
   });
-  std::erase_if(kappas, [](double k) { return !std::isfinite(k); });
+  for (double k : kappas)
+    if (std::isfinite(k)) kappas_.push_back(k);
+}
+
+FalloffEstimate FalloffSamples::estimate() const {
+  std::vector<double> kappas = kappas_;
   FalloffEstimate estimate;
   estimate.pixels = kappas.size();
   if (kappas.size() < kMinFalloffPixels) return estimate;
@@ -139,6 +148,13 @@ FalloffEstimate estimate_incidence_falloff(const Observations& observations,
   estimate.quartile_low = quantile(0.25);
   estimate.quartile_high = quantile(0.75);
   return estimate;
+}
+
+FalloffEstimate estimate_incidence_falloff(const Observations& observations,
+                                           const BiPolynomialOptions& options, std::size_t max_pixels) {
+  FalloffSamples samples(observations.pixel_count(), max_pixels);
+  samples.add(observations, options);
+  return samples.estimate();
 }
 
 }  // namespace lightstage

@@ -236,10 +236,13 @@ SolveResult solve_robust(const Observations& observations, const RobustOptions& 
   SolveResult result;
   detail::run_per_pixel(
       observations, settings,
-      [&options]() -> detail::PixelCore {
+      [&options, &observations]() -> detail::PixelCore {
         auto ws = std::make_shared<RobustWorkspace>();
-        return [ws, &options](const PixelObservations& pixel, std::size_t p, detail::PixelOutcome& out) {
-          const RobustPixelFit fit = fit_robust_pixel(pixel, options, p, *ws);
+        return [ws, &options, &observations](const PixelObservations& pixel, std::size_t p,
+                                             detail::PixelOutcome& out) {
+          // The seed follows the pixel's place in the whole image, so a band draws what the whole image
+          // would.
+          const RobustPixelFit fit = fit_robust_pixel(pixel, options, observations.first_pixel + p, *ws);
           if (fit.status == RobustPixelFit::Status::kTooFewObservations) {
             out.status = detail::PixelOutcome::Status::kTooFewObservations;
             return;

@@ -154,13 +154,16 @@ SolveResult solve_sparse(const Observations& observations, const Options& option
       },
       result);
   result.parameters = options.to_json();
-  result.summary.settings = {
-      {"iterations", iterations, fmt::format("{:.1f} iterations per pixel", iterations)}};
+  result.summary.settings = {iterations_per_pixel_fact(iterations)};
   result.summary.message = result.summary.format_message();
   return result;
 }
 
 }  // namespace
+
+SolveFact iterations_per_pixel_fact(double mean) {
+  return {"iterations", mean, fmt::format("{:.1f} iterations per pixel", mean)};
+}
 
 void L1Options::check() const {
   detail::check_shadow_threshold("L1Options", shadow_threshold);

@@ -4,6 +4,7 @@
 
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -52,8 +53,10 @@ RunResult run(const std::filesystem::path& program, const std::vector<std::strin
   if (spawned != 0) throw std::runtime_error("cannot start " + program.string());
 
   int status = 0;
-  waitpid(pid, &status, 0);
+  rusage usage{};
+  wait4(pid, &status, 0, &usage);  // the child's own resources, its peak memory among them
   RunResult result;
+  result.peak_rss_bytes = static_cast<std::size_t>(usage.ru_maxrss) * 1024;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   result.out = slurp(out_path);
   result.err = slurp(err_path);

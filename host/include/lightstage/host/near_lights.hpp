@@ -34,7 +34,8 @@ using PixelRay =
 
 // Where each pixel's viewing ray meets the plane z = plane_z_mm: the first
 // guess for NearLights::points_mm when the surface is not known (pixels × 3).
-Eigen::MatrixX3d points_on_plane(const std::vector<cv::Point>& pixels, const PixelRay& ray,
-                                 double plane_z_mm);
+// `origin` is added to every pixel (a band's place in the image).
+Eigen::MatrixX3d points_on_plane(const std::vector<cv::Point>& pixels, const PixelRay& ray, double plane_z_mm,
+                                 cv::Point origin = {});
 
 }  // namespace lightstage

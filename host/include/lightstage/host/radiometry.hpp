@@ -72,9 +72,18 @@ struct Observations {
   // Set when LED positions are known: per-pixel directions and falloff
   // (near_light_directions) replace `lights`, which stays the distant approximation.
   std::optional<NearLights> near;
+  // A band of a larger image (io/stack_bands.hpp): where the band's (0, 0)
+  // lies in the whole image, the whole image's size, and the index of
+  // pixels[0] among the whole image's pixels. `size`, `mask` and `pixels`
+  // are the band's own; what depends on a pixel's place in the image (near
+  // lights, a pixel's random seed) uses these.
+  cv::Point origin;
+  cv::Size whole_size;  // empty: `size`
+  std::size_t first_pixel = 0;
 
   std::size_t pixel_count() const { return pixels.size(); }
   std::size_t image_count() const { return static_cast<std::size_t>(lights.rows()); }
+  cv::Size image_size() const { return whole_size.empty() ? size : whole_size; }
 };
 
 // Converts `stack` as described above. An empty stack mask means every pixel.

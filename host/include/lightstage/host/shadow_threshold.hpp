@@ -20,9 +20,11 @@
 // left to estimate.
 
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
 
 #include <cstddef>
 #include <string>
+#include <vector>
 
 namespace lightstage {
 
@@ -46,6 +48,33 @@ struct ShadowThreshold {
   // "shadow threshold 0.0123 (noise floor: level 0.0041, noise 0.0027)".
   std::string describe() const;
 };
+
+// What the threshold is estimated from, gathered from the whole image at once
+// or band by band (a stack read in bands, io/stack_bands.hpp) with the same
+// result: one in every so many of the whole image's mask pixels, by their
+// place in scan order (Observations::first_pixel), and the background pixels
+// background_sample_mask picks.
+class ShadowSamples {
+ public:
+  // `total_pixels`: the mask pixels of the whole image.
+  explicit ShadowSamples(std::size_t total_pixels);
+  // The object's observations: the whole image's, or one band's after another.
+  void add_object(const Observations& observations);
+  // Observations of the background_sample_mask pixels (of the whole image or a band).
+  void add_background(const Observations& background);
+  // `source`: shadow_threshold_source of the stack, or "noise floor".
+  ShadowThreshold estimate(std::string source) const;
+
+ private:
+  std::size_t stride_ = 1;
+  std::vector<float> darkest_, partners_, lit_medians_, background_;
+};
+
+// The background pixels sampled from a stack's mask (CV_8UC1, 255 at those),
+// clear of the object by a margin; empty when there is no mask or no background.
+cv::Mat background_sample_mask(const cv::Mat& mask);
+// "dark frames", "black level" or "noise floor": what the stack subtracted.
+std::string shadow_threshold_source(const ImageStack& stack);
 
 // The threshold for `observations` made from `stack` (its mask, dark frames
 // and black levels).

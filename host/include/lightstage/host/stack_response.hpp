@@ -33,6 +33,17 @@ StackLinearity read_stack_linearity(const std::filesystem::path& stack_dir);
 // `response`. Throws InputError naming the frame when it is not 8- or 16-bit.
 void apply_response(const InverseResponse& response, ImageStack& stack, const std::string& where);
 
+// The response solve applies to the stack in `stack_dir` (nothing when the
+// frames are linear or were linearised at capture) and what linearise_stack
+// returns for it, without touching any frame: a stack read in bands applies
+// it to each band (apply_response).
+struct StackResponse {
+  std::optional<InverseResponse> response;
+  nlohmann::json description;
+};
+StackResponse choose_stack_response(const std::filesystem::path& stack_dir,
+                                    const std::filesystem::path& response_file);
+
 // The response solve uses for the stack in `stack_dir`: `response_file` when
 // given (an error when the capture already linearised the frames), otherwise
 // the one the manifest recorded and did not apply. Applies it and returns what

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace lightstage {
 
@@ -35,6 +36,21 @@ struct AngularErrorMap {
 // (CV_8UC1, nonzero = inside; empty = everywhere). A normal is present where
 // it is finite and non-zero. Throws InputError for mismatched sizes or types.
 AngularErrorMap angular_error(const cv::Mat& predicted, const cv::Mat& truth, const cv::Mat& mask = {});
+
+// angular_error's statistics gathered band by band (a stack solved in bands):
+// the bands' maps added top to bottom give the whole image's statistics.
+class AngularErrorAccumulator {
+ public:
+  // As angular_error; with `map` (sized like `truth`) also fills its degrees and valid maps.
+  void add(const cv::Mat& predicted, const cv::Mat& truth, const cv::Mat& mask = {},
+           AngularErrorMap* map = nullptr);
+  AngularErrorStats stats() const;
+
+ private:
+  std::vector<double> errors_;
+  double sum_ = 0;
+  std::size_t missing_ = 0;
+};
 
 // Loads a predicted normal map (project encoding) and a ground-truth folder
 // holding Normal_gt.png and mask.png (the mask is optional: then the ground

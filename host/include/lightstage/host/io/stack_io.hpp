@@ -35,6 +35,11 @@ struct LoadOptions {
   bool load_ground_truth = true;
   // Read manifest.json when present (per-frame LED id, exposure, levels).
   bool read_manifest = true;
+  // Decode the frames and their dark frames; false gives the frames without
+  // pixels (names, lights, manifest fields), with the mask and ground truth,
+  // for a reader that needs no frame pixels (a report without per-light
+  // statistics of a stack too large for memory).
+  bool frame_pixels = true;
   // Threads decoding images; 0 = hardware concurrency.
   int threads = 0;
 
@@ -54,6 +59,16 @@ struct LoadOptions {
 // decoding), a float image holding NaN or infinity. Dark frames named by
 // the manifest are read once each and shared by the frames naming them.
 ImageStack load_stack(const std::filesystem::path& dir, const LoadOptions& options = {});
+
+// What a stack folder declares before any pixel is decoded, with load_stack's
+// checks up to there: enough to size its decoding.
+struct StackOutline {
+  cv::Size size;               // every image's
+  std::size_t images = 0;      // frames listed
+  int pixel_bytes = 0;         // a frame's pixel decoded, from its header; 0 = not said (TIFF, RAW)
+  std::size_t dark_files = 0;  // distinct dark frames named by the manifest
+};
+StackOutline read_stack_outline(const std::filesystem::path& dir, const LoadOptions& options = {});
 
 // Writes `stack` into `dir` (created if needed) in the same layout. Frames are
 // written in their own type (8/16-bit PNG, float PFM) under Frame::filename

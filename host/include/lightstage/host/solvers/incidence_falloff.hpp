@@ -42,6 +42,8 @@ inline constexpr double kMaxFalloff = 5.0;
 inline constexpr std::size_t kMinFalloffObservations = 10;
 // Fewer voting pixels than this leave κ at 0 (the Lambertian start).
 inline constexpr std::size_t kMinFalloffPixels = 50;
+// Pixels the object's κ is estimated from, at most.
+inline constexpr std::size_t kFalloffSamplePixels = 20000;
 
 struct FalloffPixelFit {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
@@ -72,6 +74,20 @@ struct FalloffEstimate {
 // options.threads.
 FalloffEstimate estimate_incidence_falloff(const Observations& observations,
                                            const BiPolynomialOptions& options,
-                                           std::size_t max_pixels = 20000);
+                                           std::size_t max_pixels = kFalloffSamplePixels);
+
+// The same gathered band by band (a stack read in bands, io/stack_bands.hpp):
+// the pixels sampled are those the whole image's estimate samples, by their
+// place among its `total_pixels` mask pixels (Observations::first_pixel).
+class FalloffSamples {
+ public:
+  explicit FalloffSamples(std::size_t total_pixels, std::size_t max_pixels = kFalloffSamplePixels);
+  void add(const Observations& observations, const BiPolynomialOptions& options);
+  FalloffEstimate estimate() const;
+
+ private:
+  std::size_t stride_ = 1;
+  std::vector<double> kappas_;
+};
 
 }  // namespace lightstage

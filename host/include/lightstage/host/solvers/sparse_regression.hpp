@@ -47,4 +47,7 @@ struct SblOptions {
 SolveResult solve_l1(const Observations& observations, const L1Options& options = {});
 SolveResult solve_sbl(const Observations& observations, const SblOptions& options = {});
 
+// The setting l1 and sbl report: their mean reweighting or EM rounds per solved pixel.
+SolveFact iterations_per_pixel_fact(double mean);
+
 }  // namespace lightstage

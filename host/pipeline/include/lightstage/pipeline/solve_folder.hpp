@@ -4,6 +4,7 @@
 // stack holds ground truth, write the outputs (io/solve_output.hpp) and the report.
 
 #include "lightstage/common/image_stack.hpp"
+#include "lightstage/host/calibration/apply_calibration.hpp"
 #include "lightstage/host/eval/angular_error.hpp"
 #include "lightstage/host/radiometry.hpp"
 #include "lightstage/host/shadow_threshold.hpp"
@@ -47,6 +48,15 @@ struct SolveInput {
 SolveInput load_solve_input(const std::filesystem::path& input, const RadiometryOptions& radiometry,
                             const SolveCalibration& calibration = {});
 
+// Sets near lights on `observations` (made from `stack`, loaded from
+// `input`, with `applied` calibrated) when the calibration or the stack holds
+// LED positions and `calibration` does not say distant; returns the choice as
+// summary.json records it: {"model": "near"|"distant", "source": why}. With
+// `warn`, says when the stack's positions cannot be used.
+nlohmann::json set_light_model(const std::filesystem::path& input, const ImageStack& stack,
+                               const std::optional<calibration::StackCalibration>& applied,
+                               const SolveCalibration& calibration, Observations& observations, bool warn);
+
 using SolverFunction = std::function<SolveResult(const SolveInput&)>;
 
 // Loads the stack in `input`, solves it with `solver` and writes the results
@@ -58,13 +68,23 @@ SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOpt
                          const SolverFunction& solver, const std::filesystem::path& out,
                          const SolveCalibration& calibration = {});
 
+// Starts a progress report of `work` (solve_methods.hpp) and returns what advances it.
+struct SolveWork;
+using ProgressStart = std::function<SolveProgress(const SolveWork& work)>;
+
 // The same with a method of the registry (settings resolved: SolveSettings::resolve).
+// A stack whose solve would need more than settings.memory_limit is solved
+// band by band (solve_bands.hpp). `progress`, when set, is started once the
+// work is known.
 SolveReport solve_folder(const std::filesystem::path& input, const SolveSettings& settings,
-                         const std::filesystem::path& out, const SolveCalibration& calibration = {});
+                         const std::filesystem::path& out, const SolveCalibration& calibration = {},
+                         const ProgressStart& progress = {});
 
 // Writes RESULT_DIR/report.html (report/report.hpp) for a solve of the stack
-// in `input`. Throws Error naming report.html when it cannot be written (the
-// other results stay on disk; the command must still fail).
-void write_result_report(const std::filesystem::path& result_dir, const std::filesystem::path& input);
+// in `input`; without `light_statistics` the stack's frame pixels are not read
+// (a stack solved in bands). Throws Error naming report.html when it cannot be
+// written (the other results stay on disk; the command must still fail).
+void write_result_report(const std::filesystem::path& result_dir, const std::filesystem::path& input,
+                         bool light_statistics = true);
 
 }  // namespace lightstage::pipeline

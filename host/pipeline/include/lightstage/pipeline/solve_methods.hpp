@@ -47,6 +47,26 @@ SolveResult solve_with(const Observations& observations, const SolveSettings& se
 // The same with the threshold estimated from the observations alone.
 SolveResult solve_with(const Observations& observations, const SolveSettings& settings);
 
+// solve_with in two steps, for a stack solved band by band (solve_bands.hpp):
+// plan_solve makes the checks and warnings that depend on the lights alone,
+// once, and picks the threshold; solve_planned solves one set of
+// observations with it. `refit_relighting` false leaves a bi-polynomial
+// result's coefficients as the solver gave them (the refit chooses its prior
+// over the whole object: refits_relighting).
+struct SolvePlan {
+  SolveSettings settings;             // with the data threshold given to every method but l2
+  ShadowThreshold threshold;          // the threshold used
+  std::vector<std::string> warnings;  // logged by plan_solve
+};
+SolvePlan plan_solve(const Observations& observations, const SolveSettings& settings,
+                     const ShadowThreshold& data_threshold);
+SolveResult solve_planned(const Observations& observations, const SolvePlan& plan,
+                          bool refit_relighting = true);
+// Whether solve_planned refits `result`'s coefficients for relighting.
+bool refits_relighting(const SolveResult& result);
+// The normals_facing_away finding for `count` clamped normals.
+SolveFact facing_away_fact(std::size_t count);
+
 // What a solve's progress counts: pixels for the per-pixel methods (twice
 // over for monotonic with another method's azimuth, which solves every pixel
 // first), cost evaluations for shape-prior's refinement.
@@ -55,5 +75,6 @@ struct SolveWork {
   std::size_t total = 0;
 };
 SolveWork solve_work(const SolveSettings& settings, const Observations& observations);
+SolveWork solve_work(const SolveSettings& settings, std::size_t pixels);
 
 }  // namespace lightstage::pipeline

@@ -51,6 +51,8 @@ struct SolveSettings {
   std::optional<int> min_observations, threads, max_iterations;
   std::string falloff = "auto";  // bi-polynomial and auto: "auto" or kappa (incidence_falloff.hpp)
   RadiometryOptions radiometry;
+  // --memory-limit (memory_budget.hpp): a stack whose solve would need more is solved in bands.
+  std::string memory_limit = "auto";
   bool no_clamp = false;
   bool shadow_screen = false;  // robust: RobustOptions::screen_cast_shadows
 

@@ -1,0 +1,135 @@
+// A stack solved in bands (solve_bands.hpp) equals the same stack solved whole:
+// the same maps float for float, the same counts, threshold and error.
+#include "lightstage/pipeline/solve_bands.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/host/io/exr.hpp"
+#include "lightstage/host/io/pfm.hpp"
+#include "lightstage/host/io/stack_io.hpp"
+#include "lightstage/pipeline/memory_budget.hpp"
+#include "lightstage/pipeline/simulate_folder.hpp"
+#include "lightstage/pipeline/solve_folder.hpp"
+#include "lightstage/testing/errors.hpp"
+#include "lightstage/testing/paths.hpp"
+
+#include <fmt/format.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <limits>
+
+namespace lightstage::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+using lightstage::testing::error_of;
+using ::testing::HasSubstr;
+
+fs::path rig_path() { return lightstage::testing::source_dir() / "hw/rigs/sim-dome.yaml"; }
+
+// A noisy capture of near LEDs (the simulator's default) with a mask.
+fs::path simulated(const fs::path& dir, const std::string& scene, const std::string& colour = {}) {
+  sim::SimulateOptions o;
+  o.scene = scene;
+  o.width = 40;
+  o.height = 36;
+  o.colour = colour;
+  simulate_to_folder(rig_path(), o, dir);
+  return dir;
+}
+
+SolveSettings settings_for(const std::string& method, const std::string& memory_limit) {
+  SolveSettings s;
+  s.method = method;
+  s.threads = 2;
+  s.memory_limit = memory_limit;
+  s.resolve();
+  return s;
+}
+
+// A --memory-limit that gives `stack` bands of `rows` rows.
+std::string limit_for_rows(const fs::path& stack, int rows) {
+  const BandPlan whole = plan_bands(io::read_stack_outline(stack), std::numeric_limits<std::size_t>::max());
+  return std::to_string(whole.fixed_bytes + static_cast<std::size_t>(rows) * whole.row_bytes);
+}
+
+void expect_same_map(const cv::Mat& a, const cv::Mat& b, const std::string& what) {
+  ASSERT_EQ(a.type(), b.type()) << what;
+  ASSERT_EQ(a.size(), b.size()) << what;
+  EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0) << what;
+}
+
+// Solves `stack` whole and in bands of 5 rows with `settings`, and compares what they wrote.
+void expect_bands_equal_whole(const fs::path& stack, SolveSettings settings, const fs::path& out) {
+  const std::string name = settings.method;
+  const SolveReport whole = solve_folder(stack, settings, out / (name + "_whole"));
+  settings.memory_limit = limit_for_rows(stack, 5);
+  const SolveReport banded = solve_folder(stack, settings, out / (name + "_bands"));
+  SCOPED_TRACE(name);
+  EXPECT_FALSE(whole.summary.contains("bands"));
+  ASSERT_TRUE(banded.summary.contains("bands"));
+  EXPECT_EQ(banded.summary["bands"]["band_rows"], 5);
+  EXPECT_EQ(banded.summary["bands"]["bands"], 8);
+  for (const char* key : {"pixels_in_mask", "pixels_solved", "pixels_rejected_too_few_observations",
+                          "pixels_rejected_degenerate", "lights", "radiometry"})
+    EXPECT_EQ(banded.summary[key], whole.summary[key]) << key;
+  EXPECT_EQ(banded.summary["parameters"]["shadow_threshold_choice"],
+            whole.summary["parameters"]["shadow_threshold_choice"]);
+  EXPECT_EQ(banded.summary["facts"], whole.summary["facts"]);
+  ASSERT_TRUE(whole.error && banded.error);
+  EXPECT_EQ(banded.error->mean, whole.error->mean);
+  EXPECT_EQ(banded.error->median, whole.error->median);
+  EXPECT_EQ(banded.error->count, whole.error->count);
+  const fs::path a = out / (name + "_whole"), b = out / (name + "_bands");
+  expect_same_map(io::read_exr(b / "normal.exr", {"R", "G", "B"}),
+                  io::read_exr(a / "normal.exr", {"R", "G", "B"}), "normals");
+  for (const char* file : {"albedo.pfm", "residual.pfm", "confidence.pfm"})
+    expect_same_map(io::read_pfm(b / file), io::read_pfm(a / file), file);
+  if (fs::exists(a / "albedo_rgb.pfm"))
+    expect_same_map(io::read_pfm(b / "albedo_rgb.pfm"), io::read_pfm(a / "albedo_rgb.pfm"), "albedo_rgb.pfm");
+  EXPECT_TRUE(fs::exists(b / "report.html"));
+}
+
+TEST(SolveBands, EveryMethodThatSolvesInBandsGivesTheWholeImageResult) {
+  const fs::path dir = lightstage::testing::scratch_dir();
+  const fs::path stack = simulated(dir / "stack", "bumps");
+  for (const char* method : {"l2", "robust", "monotonic", "l1", "sbl"})
+    expect_bands_equal_whole(stack, settings_for(method, "auto"), dir);
+}
+
+TEST(SolveBands, RandomSeedsAndColourFollowThePixelsPlaceInTheWholeImage) {
+  const fs::path dir = lightstage::testing::scratch_dir();
+  const fs::path stack = simulated(dir / "stack", "sphere", "0.9,0.6,0.3");
+  SolveSettings ransac = settings_for("robust", "auto");
+  ransac.estimator = "ransac";
+  ransac.resolve();
+  expect_bands_equal_whole(stack, ransac, dir);
+}
+
+TEST(SolveBands, MethodsThatNeedTheWholeImageAndLimitsTooSmallAreRefused) {
+  const fs::path dir = lightstage::testing::scratch_dir();
+  const fs::path stack = simulated(dir / "stack", "sphere");
+  const std::string error = error_of(
+      [&] { solve_folder(stack, settings_for("biquadratic", limit_for_rows(stack, 5)), dir / "bq"); });
+  EXPECT_THAT(error, HasSubstr("--method biquadratic needs the whole image"));
+  EXPECT_THAT(error, HasSubstr("l2, robust, monotonic, l1, sbl"));
+  EXPECT_FALSE(fs::exists(dir / "bq" / "summary.json"));
+  EXPECT_THAT(error_of([&] { solve_folder(stack, settings_for("l2", "4K"), dir / "small"); }),
+              HasSubstr("--memory-limit 4.1 kB: too small for this stack (40x36"));
+}
+
+TEST(SolveBands, MemoryLimitsParseAsPeopleWriteThem) {
+  EXPECT_EQ(parse_memory_limit("256M"), std::size_t{256} << 20);
+  EXPECT_EQ(parse_memory_limit("1.5G"), std::size_t{3} << 29);
+  EXPECT_EQ(parse_memory_limit("4096"), 4096u);
+  EXPECT_EQ(parse_memory_limit("2k"), 2048u);
+  EXPECT_EQ(parse_memory_limit("auto"), physical_memory_bytes() / 2);
+  for (const char* bad : {"", "M", "12X", "-5M", "0", "1.5GB", "nan", "1e400"})
+    EXPECT_THAT(error_of([&] { parse_memory_limit(bad); }), HasSubstr("--memory-limit")) << bad;
+  SolveSettings settings;
+  settings.memory_limit = "lots";
+  EXPECT_THAT(error_of([&] { settings.resolve(); }), HasSubstr("'lots' is not a size"));
+}
+
+}  // namespace
+}  // namespace lightstage::pipeline
