@@ -77,8 +77,7 @@ def main():
 
         floor_seconds, _, out = run([exe, "bench", "decode", "--input", stack, "--json"])
         floor = json.loads(out)
-        print(f"stack: {args.width}x{args.height}, {floor['frames']} frames, "
-              f"{floor['decoded_bytes'] / 1e9:.2f} GB decoded")
+        print(f"stack: {stack}, {floor['frames']} frames, {floor['decoded_bytes'] / 1e9:.2f} GB decoded")
         print(f"decode floor: {floor['seconds']:.2f} s on {floor['threads']} threads "
               f"(process {floor_seconds:.2f} s)")
         print(f"memory limit: {args.memory_limit} ({limit / 1e9:.2f} GB)\n")
