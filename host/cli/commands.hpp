@@ -24,6 +24,7 @@ std::optional<double> parse_exposure_us(const std::string& text);
 void add_demo(CLI::App& app);
 void add_simulate(CLI::App& app);
 void add_solve(CLI::App& app);
+void add_batch(CLI::App& app);
 void add_bench(CLI::App& app);
 void add_reflectance(CLI::App& app);
 void add_relight(CLI::App& app);

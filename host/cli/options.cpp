@@ -126,7 +126,23 @@ void add_solve_flags(CLI::App& sub, pipeline::SolveSettings& args) {
       ->capture_default_str();
   sub.add_flag("--no-clamp", args.no_clamp, "do not clamp normalised values to <= 1");
   sub.add_option("--threads", args.threads, "solver threads (0 = all cores)");
+  sub.add_option("--crop", args.crop,
+                 "X,Y,W,H: read and solve only this region of the images (pixels from the top left); near "
+                 "lights and calibration stay placed in the whole image");
   add_shape_prior_flags(sub, args.shape_prior);
+}
+
+void add_solve_calibration_flags(CLI::App& sub, pipeline::SolveCalibration& calibration) {
+  sub.add_option("--calibration", calibration.file,
+                 "light calibration (calibration.json or .lp from `calibrate lights`): its directions and "
+                 "intensities replace the stack's, its LED positions give near lights");
+  sub.add_flag(
+      "--distant-lights", calibration.distant,
+      "ignore LED positions of the calibration or the stack (one direction per light for every pixel)");
+  sub.add_option("--response", calibration.response,
+                 "camera response (from `lightstage camera response`) to linearise the frames with; default: "
+                 "the one the stack's manifest records")
+      ->check(CLI::ExistingFile);
 }
 
 }  // namespace lightstage::cli

@@ -3,6 +3,7 @@
 // takes them.
 
 #include "lightstage/host/progress.hpp"
+#include "lightstage/pipeline/solve_folder.hpp"
 #include "lightstage/pipeline/solve_settings.hpp"
 #include "lightstage/sim/simulate.hpp"
 
@@ -44,5 +45,16 @@ void add_simulate_flags(CLI::App& sub, SimulateArgs& args);
 
 // Flags of `solve` (and `demo`): every method's options (pipeline/solve_settings.hpp).
 void add_solve_flags(CLI::App& sub, pipeline::SolveSettings& settings);
+// What `solve` and `batch` are told: where to read and write, every method's
+// settings and the lights' calibration.
+struct SolveCommandArgs {
+  std::string input;
+  std::string out;
+  OutputFlags output;
+  pipeline::SolveSettings solve;
+  pipeline::SolveCalibration calibration;
+};
+// --calibration, --distant-lights and --response of `solve` and `batch`.
+void add_solve_calibration_flags(CLI::App& sub, pipeline::SolveCalibration& calibration);
 
 }  // namespace lightstage::cli

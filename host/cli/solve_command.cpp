@@ -3,6 +3,7 @@
 #include "lightstage/host/progress.hpp"
 #include "lightstage/pipeline/solve_folder.hpp"
 #include "lightstage/pipeline/solve_methods.hpp"
+#include "lightstage/pipeline/solve_tiles.hpp"
 #include "options.hpp"
 
 #include <fmt/format.h>
@@ -15,11 +16,7 @@ namespace {
 
 // The line that says which shadow threshold the solve used and where it came from.
 std::string describe_shadow_threshold(const nlohmann::json& choice, const std::string& method) {
-  ShadowThreshold threshold;
-  threshold.value = choice.value("value", 0.0);
-  threshold.source = choice.value("source", std::string{});
-  threshold.level = choice.value("level", 0.0);
-  threshold.noise = choice.value("noise", 0.0);
+  const ShadowThreshold threshold = ShadowThreshold::from_json(choice);
   if (method == "l2" && !choice.value("used_by_l2", false))
     return "l2 keeps every observation (the published baseline); estimated " + threshold.describe();
   return threshold.describe();
@@ -28,12 +25,8 @@ std::string describe_shadow_threshold(const nlohmann::json& choice, const std::s
 }  // namespace
 
 void add_solve(CLI::App& app) {
-  struct Args {
-    std::string input;
-    std::string out;
-    OutputFlags output;
-    pipeline::SolveSettings solve;
-    pipeline::SolveCalibration calibration;
+  struct Args : SolveCommandArgs {
+    std::string tile;
   };
   auto args = std::make_shared<Args>();
   CLI::App* sub = app.add_subcommand(
@@ -53,17 +46,11 @@ void add_solve(CLI::App& app) {
   sub->add_option("--input", args->input, "stack folder")->required();
   sub->add_option("--out", args->out, "output folder")->required();
   add_solve_flags(*sub, args->solve);
-  sub->add_option("--calibration", args->calibration.file,
-                  "light calibration (calibration.json or .lp from `calibrate lights`): its directions and "
-                  "intensities replace the stack's, its LED positions give near lights");
-  sub->add_flag(
-      "--distant-lights", args->calibration.distant,
-      "ignore LED positions of the calibration or the stack (one direction per light for every pixel)");
-  sub->add_option(
-         "--response", args->calibration.response,
-         "camera response (from `lightstage camera response`) to linearise the frames with; default: "
-         "the one the stack's manifest records")
-      ->check(CLI::ExistingFile);
+  add_solve_calibration_flags(*sub, args->calibration);
+  sub->add_option("--tile", args->tile,
+                  "solve one capture as independent jobs (docs/large-captures.md): I/N solves tile I of N "
+                  "(rows I*H/N to (I+1)*H/N) into OUT/tiles, prepare estimates the shadow threshold the "
+                  "jobs share (once, before them), merge writes the solve folder from every tile");
   add_output_flags(*sub, args->output,
                    "summary.json plus out (the folder) and total_seconds (load, solve and write)");
   sub->callback([args, sub] {
@@ -71,12 +58,16 @@ void add_solve(CLI::App& app) {
     const auto start = std::chrono::steady_clock::now();
     args->solve.resolve();
     std::unique_ptr<Progress> progress;
-    const auto report = pipeline::solve_folder(
-        args->input, args->solve, args->out, args->calibration, [&](const pipeline::SolveWork& work) {
-          progress = std::make_unique<Progress>("solve " + args->solve.method, work.total, work.unit,
-                                                args->output.mode());
-          return [p = progress.get()](std::size_t items) { p->advance(items); };
-        });
+    const pipeline::ProgressStart start_progress = [&](const pipeline::SolveWork& work) {
+      progress = std::make_unique<Progress>("solve " + args->solve.method, work.total, work.unit,
+                                            args->output.mode());
+      return [p = progress.get()](std::size_t items) { p->advance(items); };
+    };
+    const auto report =
+        args->tile.empty()
+            ? pipeline::solve_folder(args->input, args->solve, args->out, args->calibration, start_progress)
+            : pipeline::solve_tile(args->input, args->solve, args->out, args->calibration, args->tile,
+                                   start_progress);
     if (progress) progress->finish();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (args->output.json) {
@@ -84,6 +75,19 @@ void add_solve(CLI::App& app) {
       j["out"] = args->out;
       j["total_seconds"] = seconds;
       fmt::print("{}\n", j.dump());
+    } else if (args->output.human() && report.summary.value("tile", nlohmann::json()) == "prepare") {
+      fmt::print("{} -> {}\n",
+                 describe_shadow_threshold(report.summary["parameters"]["shadow_threshold_choice"],
+                                           args->solve.method),
+                 report.summary["plan"].get<std::string>());
+    } else if (args->output.human() && report.summary.contains("part")) {
+      const auto& s = report.summary;
+      fmt::print("{}: tile {}/{} (rows {} to {}): solved {} of {} pixels in {:.2f} s -> {}\n",
+                 args->solve.method, s["tile"]["index"].get<int>(), s["tile"]["count"].get<int>(),
+                 s["tile"]["first_row"].get<int>(),
+                 s["tile"]["first_row"].get<int>() + s["tile"]["rows"].get<int>() - 1,
+                 s.value("pixels_solved", std::size_t{0}), s.value("pixels_in_mask", std::size_t{0}), seconds,
+                 s["part"].get<std::string>());
     } else if (args->output.human()) {
       const auto& s = report.summary;
       fmt::print("{}: solved {} of {} pixels in {:.2f} s -> {}\n", s.value("method", args->solve.method),

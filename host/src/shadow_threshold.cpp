@@ -1,5 +1,6 @@
 #include "lightstage/host/shadow_threshold.hpp"
 
+#include "lightstage/common/error.hpp"
 #include "lightstage/common/image_stack.hpp"
 #include "lightstage/host/radiometry.hpp"
 
@@ -158,6 +159,21 @@ nlohmann::json ShadowThreshold::to_json() const {
           {"noise", noise},
           {"object_samples", object_samples},
           {"background_samples", background_samples}};
+}
+
+ShadowThreshold ShadowThreshold::from_json(const nlohmann::json& json) {
+  ShadowThreshold threshold;
+  try {
+    threshold.value = json.at("value").get<double>();
+    threshold.source = json.at("source").get<std::string>();
+    threshold.level = json.value("level", 0.0);
+    threshold.noise = json.value("noise", 0.0);
+    threshold.object_samples = json.value("object_samples", std::size_t{0});
+    threshold.background_samples = json.value("background_samples", std::size_t{0});
+  } catch (const nlohmann::json::exception& e) {
+    fail("shadow threshold: {}", e.what());
+  }
+  return threshold;
 }
 
 std::string ShadowThreshold::describe() const {

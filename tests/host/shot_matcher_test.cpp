@@ -97,6 +97,16 @@ TEST(ShotMatcher, AMissingFileInTheMiddleIsFoundWithoutAnyOffset) {
   EXPECT_EQ(*m.frame_of_step[5], 4u);
 }
 
+// Every step got its file, one file (`left_over`) matched none, and step `step` took file `file`.
+void expect_one_left_over(const ShotMatch& m, std::size_t left_over, std::size_t step, std::size_t file) {
+  EXPECT_FALSE(m.ambiguous);
+  EXPECT_EQ(m.dropped(), 0u);
+  ASSERT_EQ(m.unmatched_frames.size(), 1u);
+  EXPECT_EQ(m.unmatched_frames[0], left_over);
+  ASSERT_TRUE(m.frame_of_step[step]);
+  EXPECT_EQ(*m.frame_of_step[step], file);
+}
+
 TEST(ShotMatcher, AStrayFileFromAnEarlierBatchIsLeftOver) {
   const auto steps = steps_of(6);
   auto files = files_of(steps, {0, 1, 2, 3, 4, 5}, 0);
@@ -105,23 +115,14 @@ TEST(ShotMatcher, AStrayFileFromAnEarlierBatchIsLeftOver) {
                ShotTiming{steps[0].trigger_ns - 3'000 * kMs, kMs, steps[0].trigger_ns + 50 * kMs});
   ShotMatchOptions options = kOptions;
   options.clock_offset_ns = 50 * kMs;
-  const ShotMatch m = match_shots(steps, files, options);
-  EXPECT_EQ(m.dropped(), 0u);
-  ASSERT_EQ(m.unmatched_frames.size(), 1u);
-  EXPECT_EQ(m.unmatched_frames[0], 0u);
-  EXPECT_EQ(*m.frame_of_step[0], 1u);
+  expect_one_left_over(match_shots(steps, files, options), /*left_over=*/0, /*step=*/0, /*file=*/1);
 }
 
 TEST(ShotMatcher, AFileWithoutAStampAmongStampedOnesIsLeftOver) {
   const auto steps = steps_of(6);
   auto files = files_of(steps, {0, 1, 2, 3, 4, 5}, 900 * kMs);
   files.insert(files.begin() + 3, ShotTiming{0, 0, files[2].arrived_ns + 1});  // a foreign file, no EXIF time
-  const ShotMatch m = match_shots(steps, files, kOptions);
-  EXPECT_FALSE(m.ambiguous);
-  EXPECT_EQ(m.dropped(), 0u);
-  ASSERT_EQ(m.unmatched_frames.size(), 1u);
-  EXPECT_EQ(m.unmatched_frames[0], 3u);
-  EXPECT_EQ(*m.frame_of_step[3], 4u);
+  expect_one_left_over(match_shots(steps, files, kOptions), /*left_over=*/3, /*step=*/3, /*file=*/4);
 }
 
 TEST(ShotMatcher, AFileCannotBelongToAStepWhoseExposureEndedAfterItArrived) {

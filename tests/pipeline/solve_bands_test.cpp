@@ -118,6 +118,39 @@ TEST(SolveBands, MethodsThatNeedTheWholeImageAndLimitsTooSmallAreRefused) {
               HasSubstr("--memory-limit 4.1 kB: too small for this stack (40x36"));
 }
 
+TEST(SolveBands, ACropIsTheWholeSolveCutToItsRegionInBandsOrWhole) {
+  const fs::path dir = lightstage::testing::scratch_dir();
+  const fs::path stack = simulated(dir / "stack", "bumps", "0.9,0.6,0.3");  // near LEDs, colour
+  const SolveReport whole = solve_folder(stack, settings_for("l2", "auto"), dir / "whole");
+  const cv::Rect region(5, 7, 21, 17);
+  const cv::Mat expected = io::read_exr(dir / "whole" / "normal.exr", {"R", "G", "B"})(region);
+  for (const bool bands : {false, true}) {
+    SCOPED_TRACE(bands ? "bands" : "whole");
+    SolveSettings settings = settings_for("l2", bands ? limit_for_rows(stack, 4) : "auto");
+    settings.crop = "5,7,21,17";
+    const fs::path out = dir / (bands ? "crop_bands" : "crop_whole");
+    const SolveReport crop = solve_folder(stack, settings, out);
+    EXPECT_EQ(crop.summary.contains("bands"), bands);
+    EXPECT_EQ(crop.summary["crop"], nlohmann::json({5, 7, 21, 17}));
+    EXPECT_EQ(crop.summary["lights"], whole.summary["lights"]);
+    expect_same_map(io::read_exr(out / "normal.exr", {"R", "G", "B"}), expected, "normals");
+    ASSERT_TRUE(crop.error);
+    EXPECT_LT(crop.error->count, whole.error->count);
+  }
+  SolveSettings bad = settings_for("l2", "auto");
+  for (const char* text : {"1,2,3", "1,2,3,4,5", "a,b,c,d", "-1,0,4,4", "0,0,0,4", "1 ,2,3,4"}) {
+    bad.crop = text;
+    EXPECT_THAT(error_of([&] { bad.resolve(); }), HasSubstr("--crop")) << text;
+  }
+  bad.crop = "30,0,11,10";
+  EXPECT_THAT(error_of([&] { solve_folder(stack, bad, dir / "outside"); }),
+              HasSubstr("--crop 30,0,11,10: reaches outside the 40x36 images of"));
+  bad = settings_for("shape-prior", "auto");
+  bad.crop = "0,0,4,4";
+  EXPECT_THAT(error_of([&] { bad.resolve(); }),
+              HasSubstr("shape-prior's depth prior covers the whole image"));
+}
+
 TEST(SolveBands, MemoryLimitsParseAsPeopleWriteThem) {
   EXPECT_EQ(parse_memory_limit("256M"), std::size_t{256} << 20);
   EXPECT_EQ(parse_memory_limit("1.5G"), std::size_t{3} << 29);

@@ -11,6 +11,7 @@
 #include "lightstage/pipeline/memory_budget.hpp"
 #include "lightstage/pipeline/solve_bands.hpp"
 #include "lightstage/pipeline/solve_methods.hpp"
+#include "stack_region.hpp"
 
 #include <fmt/format.h>
 
@@ -59,15 +60,27 @@ nlohmann::json set_light_model(const std::filesystem::path& input, const ImageSt
 }
 
 SolveInput load_solve_input(const std::filesystem::path& input, const RadiometryOptions& radiometry,
-                            const SolveCalibration& calibration) {
+                            const SolveCalibration& calibration, const cv::Rect& region) {
   radiometry.check();
-  ImageStack stack = io::load_stack(input);
+  ImageStack stack;
+  cv::Size whole;
+  if (region.empty()) {
+    stack = io::load_stack(input);
+  } else {
+    io::StackBands bands(input);
+    whole = bands.size();
+    stack = read_region_rows(bands, region, region.y, region.height);
+  }
   const nlohmann::json response = linearise_stack(input, stack, calibration.response);
   std::optional<calibration::StackCalibration> applied;
   if (!calibration.file.empty())
     applied = calibration::apply_calibration_file(calibration.file, input, stack);
   SolveInput prepared;
   prepared.observations = make_observations(stack, radiometry);
+  if (!region.empty()) {
+    prepared.observations.origin = region.tl();
+    prepared.observations.whole_size = whole;
+  }
   prepared.shadow = estimate_shadow_threshold(stack, prepared.observations);
   prepared.ground_truth = std::move(stack.ground_truth);
   prepared.response = response;
@@ -82,9 +95,9 @@ SolveInput load_solve_input(const std::filesystem::path& input, const Radiometry
 
 SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOptions& radiometry,
                          const SolverFunction& solver, const std::filesystem::path& out,
-                         const SolveCalibration& calibration) {
+                         const SolveCalibration& calibration, const cv::Rect& region) {
   io::require_separate_output(out, {input});
-  const SolveInput prepared = load_solve_input(input, radiometry, calibration);
+  const SolveInput prepared = load_solve_input(input, radiometry, calibration, region);
   const SolveResult result = solver(prepared);
   if (result.summary.pixels_solved == 0)
     fail("{}: {} solved no pixel: {}", input.string(), result.summary.method,
@@ -94,6 +107,7 @@ SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOpt
       {"radiometry", {{"clamp_to_one", radiometry.clamp_to_one}, {"response", prepared.response}}},
       {"lights", prepared.light_model}};
   if (!prepared.calibration.is_null()) extra["calibration"] = prepared.calibration;
+  if (!region.empty()) extra["crop"] = {region.x, region.y, region.width, region.height};
   if (prepared.ground_truth && !prepared.ground_truth->normals.empty()) {
     report.error =
         angular_error(result.normals, prepared.ground_truth->normals, prepared.observations.mask).stats;
@@ -117,14 +131,17 @@ SolveReport solve_folder(const std::filesystem::path& input, const SolveSettings
                          const std::filesystem::path& out, const SolveCalibration& calibration,
                          const ProgressStart& progress) {
   io::require_separate_output(out, {input});
-  const BandPlan plan = plan_bands(io::read_stack_outline(input), parse_memory_limit(settings.memory_limit));
+  io::StackOutline outline = io::read_stack_outline(input);
+  const cv::Rect region = solve_region(settings, outline.size, input);
+  outline.size.height = region.height;  // frames are decoded full width, then cut to the region
+  const BandPlan plan = plan_bands(outline, parse_memory_limit(settings.memory_limit));
   if (plan.bands > 1) {
     io::StackBands stack(input);
     SolveSettings banded = settings;
     if (progress) {
       const cv::Mat& mask = stack.index().mask;
       const auto pixels =
-          static_cast<std::size_t>(mask.empty() ? stack.size().area() : cv::countNonZero(mask));
+          static_cast<std::size_t>(mask.empty() ? region.area() : cv::countNonZero(mask(region)));
       banded.set_progress(progress(solve_work(settings, pixels)));
     }
     return solve_folder_in_bands(input, banded, out, calibration, stack, plan);
@@ -136,7 +153,7 @@ SolveReport solve_folder(const std::filesystem::path& input, const SolveSettings
         if (progress) chosen.set_progress(progress(solve_work(settings, prepared.observations)));
         return solve_with(prepared.observations, chosen, prepared.shadow);
       },
-      out, calibration);
+      out, calibration, settings.crop.empty() ? cv::Rect{} : region);
 }
 
 }  // namespace lightstage::pipeline

@@ -20,6 +20,33 @@ std::optional<double> parse_falloff(const std::string& text) {
   return value;
 }
 
+cv::Rect parse_crop(const std::string& text) {
+  if (text.empty()) return {};
+  int values[4] = {0, 0, 0, 0};
+  const char* at = text.data();
+  const char* end = text.data() + text.size();
+  for (int i = 0; i < 4; ++i) {
+    const auto [next, error] = std::from_chars(at, end, values[i]);
+    const bool last = i == 3;
+    if (error != std::errc{} || next == at || (last ? next != end : (next == end || *next != ',')))
+      fail("--crop '{}': expected X,Y,W,H in pixels (e.g. 1200,800,2000,1500)", text);
+    at = next + (last ? 0 : 1);
+  }
+  if (values[0] < 0 || values[1] < 0 || values[2] <= 0 || values[3] <= 0)
+    fail("--crop '{}': X and Y must be 0 or more, W and H more than 0", text);
+  return {values[0], values[1], values[2], values[3]};
+}
+
+cv::Rect solve_region(const SolveSettings& settings, cv::Size image, const std::filesystem::path& input) {
+  const cv::Rect whole({0, 0}, image);
+  const cv::Rect crop = parse_crop(settings.crop);
+  if (crop.empty()) return whole;
+  if ((crop & whole) != crop)
+    fail("--crop {}: reaches outside the {}x{} images of {}", settings.crop, image.width, image.height,
+         input.string());
+  return crop;
+}
+
 void SolveSettings::set_progress(const SolveProgress& progress) {
   l2.progress = robust.progress = rpca.progress = l1.progress = sbl.progress = monotonic.progress =
       bipolynomial.progress = automatic.progress = progress;
@@ -35,6 +62,9 @@ void SolveSettings::use_data_shadow_threshold(double value) {
 void SolveSettings::resolve() {
   find_solve_method(method);  // names the known methods when unknown
   parse_memory_limit(memory_limit);
+  parse_crop(crop);
+  if (!crop.empty() && method == "shape-prior")
+    fail("--crop: shape-prior's depth prior covers the whole image; crop the stack and its prior instead");
   radiometry.clamp_to_one = !no_clamp;
   robust.estimator = parse_robust_estimator(estimator);
   robust.screen_cast_shadows = shadow_screen;

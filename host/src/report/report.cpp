@@ -104,6 +104,31 @@ class Page {
   std::string nav_, body_;
 };
 
+// A result of `solve --crop` covers summary.json's "crop" [x, y, w, h] of the
+// stack: its frames, mask and ground truth are cut to it.
+void cut_to_crop(ImageStack& stack, const nlohmann::json& crop) {
+  if (!crop.is_array() || crop.size() != 4 ||
+      !std::all_of(crop.begin(), crop.end(), [](const auto& v) { return v.is_number_integer(); }))
+    fail("summary.json: crop must be [x, y, width, height], got {}", crop.dump());
+  const cv::Rect region(crop[0].get<int>(), crop[1].get<int>(), crop[2].get<int>(), crop[3].get<int>());
+  const auto cut = [&](cv::Mat& map, const char* what) {
+    if (map.empty()) return;
+    if ((region & cv::Rect({0, 0}, map.size())) != region)
+      fail("summary.json: crop {} reaches outside the stack's {}x{} {}", crop.dump(), map.cols, map.rows,
+           what);
+    map = map(region).clone();
+  };
+  for (Frame& frame : stack.frames) {
+    cut(frame.image, "frames");
+    cut(frame.dark, "dark frames");
+  }
+  cut(stack.mask, "mask");
+  if (stack.ground_truth) {
+    cut(stack.ground_truth->normals, "ground truth");
+    cut(stack.ground_truth->depth, "ground-truth depth");
+  }
+}
+
 void load_inputs(Inputs& in, const io::SolveFolder& folder, const ReportOptions& options) {
   in.summary = folder.summary;
   if (!fs::exists(in.result_dir / "summary.json")) {
@@ -134,6 +159,7 @@ void load_inputs(Inputs& in, const io::SolveFolder& folder, const ReportOptions&
     load.frame_pixels = options.light_statistics;  // only the statistics need the frames' pixels
     try {
       in.stack = io::load_stack(*in.stack_dir, load);
+      if (const auto crop = in.summary.find("crop"); crop != in.summary.end()) cut_to_crop(*in.stack, *crop);
     } catch (const InputError& e) {
       if (options.stack) throw;
       in.notes.push_back(

@@ -229,12 +229,8 @@ class AravisCamera final : public camera::Camera {
 
   camera::Validation validate(camera::CameraConfig& config) const override {
     camera::Validation v;
-    const camera::FormatInfo* format = find_offered_format(v, config, formats_, config_.pixel_format);
-    if (!format) return v;
     // Every format offers the same single range (the Width/Height bounds and increments).
-    snap_size(v, config, *format, /*name_format=*/false);
-    clamp_roi(v, config.roi, config.size);
-    clamp_buffer_count(v, config.buffer_count, 2, 64);
+    if (!validate_offered(v, config, formats_, config_.pixel_format, /*name_format=*/false, 64)) return v;
     if (std::find(trigger_modes_.begin(), trigger_modes_.end(), config.trigger) == trigger_modes_.end()) {
       note_invalid(
           v, fmt::format("trigger {} is not offered by this camera ({})", camera::to_string(config.trigger),
@@ -246,10 +242,7 @@ class AravisCamera final : public camera::Camera {
   }
 
   void configure(const camera::CameraConfig& requested) override {
-    if (streaming_)
-      throw CameraError(fmt::format("{}: cannot configure while streaming; stop() first", uri()));
-    camera::CameraConfig config = requested;
-    require_valid(validate(config), uri());
+    const camera::CameraConfig config = require_configurable(*this, requested, streaming_, uri());
     const std::string genicam(genicam_name(config.pixel_format));
     GErrorHolder error;
     arv_camera_set_pixel_format_from_string(camera_.get(), genicam.c_str(), error.out());

@@ -129,6 +129,25 @@ void clamp_buffer_count(camera::Validation& v, int& buffer_count, int lo, int hi
   buffer_count = clamped;
 }
 
+const camera::FormatInfo* validate_offered(camera::Validation& v, camera::CameraConfig& config,
+                                           const std::vector<camera::FormatInfo>& formats,
+                                           const std::string& current, bool name_format, int max_buffers) {
+  const camera::FormatInfo* format = find_offered_format(v, config, formats, current);
+  if (!format) return nullptr;
+  snap_size(v, config, *format, name_format);
+  clamp_roi(v, config.roi, config.size);
+  clamp_buffer_count(v, config.buffer_count, 2, max_buffers);
+  return format;
+}
+
+camera::CameraConfig require_configurable(const camera::Camera& camera, const camera::CameraConfig& requested,
+                                          bool streaming, const std::string& uri) {
+  if (streaming) throw CameraError(fmt::format("{}: cannot configure while streaming; stop() first", uri));
+  camera::CameraConfig config = requested;
+  require_valid(camera.validate(config), uri);
+  return config;
+}
+
 void require_valid(const camera::Validation& v, const std::string& uri) {
   if (v.status == camera::ConfigStatus::kValid) return;
   throw CameraError(fmt::format("{}: configuration is {} ({}); call validate() and apply what it returns",

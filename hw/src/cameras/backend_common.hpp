@@ -59,9 +59,21 @@ void clamp_roi(camera::Validation& v, std::optional<camera::Roi>& roi, camera::S
 // Clamps `buffer_count` to [lo, hi].
 void clamp_buffer_count(camera::Validation& v, int& buffer_count, int lo, int hi);
 
+// The steps of validate() for a camera whose formats list their sizes: the
+// offered format (find_offered_format), its nearest size (snap_size), the ROI
+// and the buffer count in [2, max_buffers]. nullptr when the format is not offered.
+const camera::FormatInfo* validate_offered(camera::Validation& v, camera::CameraConfig& config,
+                                           const std::vector<camera::FormatInfo>& formats,
+                                           const std::string& current, bool name_format, int max_buffers);
+
 // Throws camera::CameraError naming `uri` and validate()'s notes unless `v` is
 // Valid: configure() applies only what validate() accepts unchanged.
 void require_valid(const camera::Validation& v, const std::string& uri);
+
+// configure()'s first steps: refuses while `streaming`, and a config that
+// `camera`.validate() would change (require_valid). Returns the config.
+camera::CameraConfig require_configurable(const camera::Camera& camera, const camera::CameraConfig& requested,
+                                          bool streaming, const std::string& uri);
 
 // Throws camera::CameraError (Unsupported) unless `config` asks for software
 // triggering, and (Failed) when the camera is not `streaming`.

@@ -121,19 +121,13 @@ class V4l2Camera final : public camera::Camera {
 
   camera::Validation validate(camera::CameraConfig& config) const override {
     camera::Validation v;
-    const camera::FormatInfo* format = find_offered_format(v, config, formats_, config_.pixel_format);
-    if (!format) return v;
-    snap_size(v, config, *format, /*name_format=*/true);  // VIDIOC_ENUM_FRAMESIZES is per format
-    clamp_roi(v, config.roi, config.size);
-    clamp_buffer_count(v, config.buffer_count, 2, 32);
+    // VIDIOC_ENUM_FRAMESIZES is per format: a size note names it.
+    validate_offered(v, config, formats_, config_.pixel_format, /*name_format=*/true, 32);
     return v;
   }
 
   void configure(const camera::CameraConfig& requested) override {
-    if (streaming_)
-      throw CameraError(fmt::format("{}: cannot configure while streaming; stop() first", uri()));
-    camera::CameraConfig config = requested;
-    require_valid(validate(config), uri());
+    const camera::CameraConfig config = require_configurable(*this, requested, streaming_, uri());
     const PixelFormatDesc* desc = find_pixel_format(config.pixel_format);
     v4l2_format fmt{};
     fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;

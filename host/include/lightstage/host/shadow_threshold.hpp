@@ -45,6 +45,8 @@ struct ShadowThreshold {
   std::size_t background_samples = 0;  // background values used
 
   nlohmann::json to_json() const;
+  // Reads to_json()'s output back; throws InputError naming the missing or malformed field.
+  static ShadowThreshold from_json(const nlohmann::json& json);
   // "shadow threshold 0.0123 (noise floor: level 0.0041, noise 0.0027)".
   std::string describe() const;
 };

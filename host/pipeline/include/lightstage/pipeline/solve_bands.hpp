@@ -5,7 +5,8 @@
 // The result equals solving the whole image at once (the same normals,
 // albedo, residual, confidence and chroma, float for float):
 //   pass 1  the shadow threshold's samples (shadow_threshold.hpp), drawn from
-//           the whole image's pixels as a whole-image solve draws them;
+//           the whole image's pixels as a whole-image solve draws them (not
+//           with --shadow-threshold: the stack is then decoded once);
 //   pass 2  each band solved with that threshold; a pixel's place in the whole
 //           image (Observations::origin, first_pixel) gives its near lights
 //           and its random seed.
@@ -46,6 +47,8 @@ BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit);
 
 // Whether `method` can be solved band by band (see above).
 bool solves_in_bands(const std::string& method);
+// Those methods, "l2, robust, ...", for messages.
+std::string band_methods_text();
 
 // Solves `stack` (opened from `input`) in the bands of `plan` and writes the
 // solve folder as solve_folder does. Throws InputError, before reading any

@@ -45,8 +45,10 @@ struct SolveInput {
   nlohmann::json response = nullptr;     // the camera response applied (stack_response.hpp)
   nlohmann::json light_model = nullptr;  // {"model": "near"|"distant", "source": why}
 };
+// `region` (non-empty): only that part of the images is read (--crop), the
+// observations placed in the whole image (Observations::origin).
 SolveInput load_solve_input(const std::filesystem::path& input, const RadiometryOptions& radiometry,
-                            const SolveCalibration& calibration = {});
+                            const SolveCalibration& calibration = {}, const cv::Rect& region = {});
 
 // Sets near lights on `observations` (made from `stack`, loaded from
 // `input`, with `applied` calibrated) when the calibration or the stack holds
@@ -66,7 +68,7 @@ using SolverFunction = std::function<SolveResult(const SolveInput&)>;
 // Error when the report fails.
 SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOptions& radiometry,
                          const SolverFunction& solver, const std::filesystem::path& out,
-                         const SolveCalibration& calibration = {});
+                         const SolveCalibration& calibration = {}, const cv::Rect& region = {});
 
 // Starts a progress report of `work` (solve_methods.hpp) and returns what advances it.
 struct SolveWork;

@@ -15,6 +15,9 @@
 #include "lightstage/host/solvers/shape_prior.hpp"
 #include "lightstage/host/solvers/sparse_regression.hpp"
 
+#include <opencv2/core.hpp>
+
+#include <filesystem>
 #include <optional>
 #include <string>
 
@@ -53,6 +56,10 @@ struct SolveSettings {
   RadiometryOptions radiometry;
   // --memory-limit (memory_budget.hpp): a stack whose solve would need more is solved in bands.
   std::string memory_limit = "auto";
+  // --crop X,Y,W,H: only that region of the images (from the top left) is read
+  // and solved; its maps are W x H, near lights and calibration still placed
+  // in the whole image. Empty: the whole image.
+  std::string crop;
   bool no_clamp = false;
   bool shadow_screen = false;  // robust: RobustOptions::screen_cast_shadows
 
@@ -68,6 +75,14 @@ struct SolveSettings {
   // Gives every method's options the same progress report (solve_result.hpp).
   void set_progress(const SolveProgress& progress);
 };
+
+// "X,Y,W,H" (X, Y >= 0, W, H > 0) as a rectangle; empty text gives an empty
+// one. Throws InputError naming --crop.
+cv::Rect parse_crop(const std::string& text);
+
+// The region of an `image`-sized stack a solve reads: --crop, checked to lie
+// inside it (InputError naming --crop, the size and `input`), else the whole image.
+cv::Rect solve_region(const SolveSettings& settings, cv::Size image, const std::filesystem::path& input);
 
 // The bi-polynomial start's fall-off: "auto" (estimated from the object, nullopt)
 // or a number in [kMinFalloff, kMaxFalloff]; throws InputError naming --falloff.

@@ -1,0 +1,197 @@
+#include "band_solver.hpp"
+
+#include "stack_region.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/common/log.hpp"
+#include "lightstage/host/io/solve_output.hpp"
+#include "lightstage/host/radiometry.hpp"
+#include "lightstage/pipeline/memory_budget.hpp"
+#include "lightstage/pipeline/solve_folder.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace lightstage::pipeline::bands {
+namespace {
+
+// Pastes a band's map into the whole image's, allocating it (zeros) at the first band that has one.
+void paste(const cv::Mat& band, int y0, cv::Size size, cv::Mat& whole) {
+  if (band.empty()) return;
+  if (whole.empty()) whole = cv::Mat(size, band.type(), cv::Scalar::all(0));
+  band.copyTo(whole.rowRange(y0, y0 + band.rows));
+}
+
+const SolveFact* find_fact(const std::vector<SolveFact>& facts, const std::string& key) {
+  const auto it = std::find_if(facts.begin(), facts.end(), [&](const SolveFact& f) { return f.key == key; });
+  return it == facts.end() ? nullptr : &*it;
+}
+
+}  // namespace
+
+void BandResults::add(const SolveResult& band, int y0) {
+  if (!started_) {
+    whole_.parameters = band.parameters;
+    whole_.reflectance = band.reflectance;
+    whole_.choices = band.choices;
+    whole_.summary.method = band.summary.method;
+    whole_.summary.settings = band.summary.settings;
+    started_ = true;
+  }
+  paste(band.normals, y0, size_, whole_.normals);
+  paste(band.albedo, y0, size_, whole_.albedo);
+  paste(band.residual, y0, size_, whole_.residual);
+  paste(band.solved, y0, size_, whole_.solved);
+  paste(band.confidence, y0, size_, whole_.confidence);
+  paste(band.chroma, y0, size_, whole_.chroma);
+  paste(band.coefficients, y0, size_, whole_.coefficients);
+  paste(band.choice, y0, size_, whole_.choice);
+  SolveSummary& s = whole_.summary;
+  const SolveSummary& b = band.summary;
+  s.pixels_in_mask += b.pixels_in_mask;
+  s.pixels_solved += b.pixels_solved;
+  s.pixels_rejected_too_few_observations += b.pixels_rejected_too_few_observations;
+  s.pixels_rejected_degenerate += b.pixels_rejected_degenerate;
+  s.seconds += b.seconds;
+  if (const SolveFact* f = find_fact(b.findings, "normals_facing_away"))
+    facing_away_ += f->value.get<std::size_t>();
+  // A band's mean of whole iteration counts gives back its total exactly, so the mean over all bands is
+  // the whole image's to the last bit.
+  if (const SolveFact* f = find_fact(b.settings, "iterations"))
+    iterations_ += std::round(f->value.get<double>() * static_cast<double>(b.pixels_solved));
+}
+
+SolveResult BandResults::finish() {
+  // Maps a method always writes stay whole-image sized when no band had a pixel.
+  for (cv::Mat* map : {&whole_.normals, &whole_.albedo, &whole_.residual, &whole_.solved}) {
+    if (!map->empty()) continue;
+    const int type = map == &whole_.normals ? CV_32FC3 : map == &whole_.solved ? CV_8UC1 : CV_32FC1;
+    *map = cv::Mat(size_, type, cv::Scalar::all(0));
+  }
+  SolveSummary& s = whole_.summary;
+  s.findings = {facing_away_fact(facing_away_)};
+  for (SolveFact& fact : s.settings) {
+    if (fact.key == "iterations")
+      fact = iterations_per_pixel_fact(
+          s.pixels_solved > 0 ? iterations_ / static_cast<double>(s.pixels_solved) : 0.0);
+  }
+  s.message = s.format_message();
+  return std::move(whole_);
+}
+
+BandSolver::BandSolver(const std::filesystem::path& input, const SolveSettings& settings,
+                       const SolveCalibration& calibration, io::StackBands& stack, const BandPlan& plan)
+    : input_(input), settings_(settings), calibration_(calibration), stack_(stack), plan_(plan) {
+  if (!solves_in_bands(settings.method))
+    fail(
+        "{}: --method {} needs the whole image in memory (about {}, over --memory-limit): it solves in "
+        "bands only with {}",
+        input.string(), settings.method, describe_bytes(plan.whole_bytes), band_methods_text());
+  settings.radiometry.check();
+  region_ = solve_region(settings, stack.size(), input);
+  meta_ = stack.index();
+  if (!meta_.mask.empty()) meta_.mask = meta_.mask(region_).clone();
+  response_ = choose_stack_response(input, calibration.response);
+  if (!calibration.file.empty())
+    applied_ = calibration::apply_calibration_file(calibration.file, input, meta_);
+  background_ = background_sample_mask(meta_.mask);
+}
+
+std::size_t BandSolver::mask_pixels(int begin, int end) const {
+  return meta_.mask.empty() ? static_cast<std::size_t>(end - begin) * static_cast<std::size_t>(size().width)
+                            : static_cast<std::size_t>(cv::countNonZero(meta_.mask.rowRange(begin, end)));
+}
+
+void BandSolver::for_each_band(int begin, int end, const BandVisit& visit) {
+  // A pixel's place among the region's mask pixels seeds its random draws.
+  std::size_t first_pixel = mask_pixels(0, begin);
+  for (int y0 = begin; y0 < end; y0 += plan_.band_rows) {
+    const int rows = std::min(plan_.band_rows, end - y0);
+    ImageStack band = read_region_rows(stack_, region_, region_.y + y0, rows);
+    for (std::size_t i = 0; i < band.frames.size(); ++i) {
+      Frame frame = meta_.frames[i];
+      frame.image = band.frames[i].image;
+      frame.dark = band.frames[i].dark;
+      band.frames[i] = std::move(frame);
+    }
+    if (response_.response) apply_response(*response_.response, band, input_.string());
+    Observations observations = make_observations(band, settings_.radiometry);
+    observations.origin = {region_.x, region_.y + y0};
+    observations.whole_size = stack_.size();
+    observations.first_pixel = first_pixel;
+    first_pixel += observations.pixel_count();
+    visit(band, observations, y0);
+  }
+}
+
+bool BandSolver::estimates_shadow_threshold() const { return !settings_.shadow_threshold; }
+
+ShadowThreshold BandSolver::shadow_threshold() {
+  if (!estimates_shadow_threshold()) return {};
+  ShadowSamples samples(mask_pixels(0, size().height));
+  std::string source;
+  for_each_band(0, size().height, [&](ImageStack& band, Observations& observations, int y0) {
+    if (source.empty()) source = shadow_threshold_source(band);
+    samples.add_object(observations);
+    if (background_.empty()) return;
+    band.mask = background_.rowRange(y0, y0 + observations.size.height).clone();
+    samples.add_background(make_observations(band));
+  });
+  return samples.estimate(source);
+}
+
+SolveResult BandSolver::solve_rows(int begin, int end, const ShadowThreshold& threshold,
+                                   AngularErrorAccumulator& error, bool& has_ground_truth) {
+  std::optional<SolvePlan> solve_plan;
+  BandResults results({size().width, end - begin});
+  for_each_band(begin, end, [&](ImageStack& band, Observations& observations, int y0) {
+    const nlohmann::json model =
+        set_light_model(input_, band, applied_, calibration_, observations, /*warn=*/light_model_.is_null());
+    if (light_model_.is_null()) light_model_ = model;
+    if (!solve_plan) solve_plan = plan_solve(observations, settings_, threshold);
+    if (observations.pixel_count() == 0) return;
+    const SolveResult result = solve_planned(observations, *solve_plan, /*refit_relighting=*/false);
+    results.add(result, y0 - begin);
+    if (band.ground_truth && !band.ground_truth->normals.empty()) {
+      error.add(result.normals, band.ground_truth->normals, observations.mask);
+      has_ground_truth = true;
+    }
+  });
+  return results.finish();
+}
+
+nlohmann::json BandSolver::describe() const {
+  nlohmann::json extra = {
+      {"radiometry",
+       {{"clamp_to_one", settings_.radiometry.clamp_to_one}, {"response", response_.description}}},
+      {"lights", light_model_},
+      {"bands", plan_.to_json()}};
+  if (region_.size() != stack_.size()) extra["crop"] = {region_.x, region_.y, region_.width, region_.height};
+  if (applied_) {
+    extra["calibration"] = applied_->describe();
+    extra["calibration"]["near_lights"] = light_model_.value("source", "") == "calibration";
+  }
+  return extra;
+}
+
+SolveReport write_band_solve(const std::filesystem::path& input, const std::filesystem::path& out,
+                             const SolveResult& result, nlohmann::json extra,
+                             const std::optional<AngularErrorStats>& error) {
+  if (result.summary.pixels_solved == 0)
+    fail("{}: {} solved no pixel: {}", input.string(), result.summary.method,
+         result.summary.unusable_reason());
+  SolveReport report;
+  if (error) {
+    report.error = error;
+    extra["error_vs_ground_truth"] = error->to_json();
+  }
+  report.summary = io::write_solve_outputs(out, result, input, extra);
+  logger("host")->info("{}", result.summary.message);
+  // Per-light statistics would read the whole stack at once: the report leaves them out (and says so).
+  write_result_report(out, input, /*light_statistics=*/false);
+  return report;
+}
+
+}  // namespace lightstage::pipeline::bands

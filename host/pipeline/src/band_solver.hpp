@@ -1,0 +1,102 @@
+#pragma once
+// What a stack solved in bands (solve_bands.cpp) and the tile jobs of
+// `solve --tile` (solve_tiles.cpp) share: the passes over a stack's rows and
+// the bands' results made into one.
+
+#include "lightstage/host/calibration/apply_calibration.hpp"
+#include "lightstage/host/eval/angular_error.hpp"
+#include "lightstage/host/io/stack_bands.hpp"
+#include "lightstage/host/shadow_threshold.hpp"
+#include "lightstage/host/stack_response.hpp"
+#include "lightstage/pipeline/solve_bands.hpp"
+#include "lightstage/pipeline/solve_methods.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cstddef>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+
+namespace lightstage::pipeline::bands {
+
+// Results of bands (or of tiles, each itself the result of its bands) made
+// into the whole image's: maps pasted at their rows, counts added, the facts
+// that depend on the data (normals facing away, l1/sbl iterations per pixel)
+// merged exactly.
+class BandResults {
+ public:
+  explicit BandResults(cv::Size size) : size_(size) {}
+
+  // `band` holds rows [y0, y0 + band.normals.rows) of the whole image.
+  void add(const SolveResult& band, int y0);
+  SolveResult finish();
+
+ private:
+  cv::Size size_;
+  SolveResult whole_;
+  bool started_ = false;
+  std::size_t facing_away_ = 0;
+  double iterations_ = 0;
+};
+
+// A stack solved band by band. What applies to every band is decided once, at
+// construction: the camera response, the calibration's lights, the
+// background sample of the shadow threshold.
+class BandSolver {
+ public:
+  // Throws InputError for a method that does not solve in bands (naming the
+  // memory it needs whole and --memory-limit) and for what radiometry and the
+  // calibration refuse.
+  BandSolver(const std::filesystem::path& input, const SolveSettings& settings,
+             const SolveCalibration& calibration, io::StackBands& stack, const BandPlan& plan);
+
+  // Whether the shadow threshold is estimated from the data (a pass over
+  // every row): not with --shadow-threshold.
+  bool estimates_shadow_threshold() const;
+  // Pass 1: the threshold a whole-image solve estimates, from every row
+  // (with --shadow-threshold, a default the flag's value replaces: no pass).
+  ShadowThreshold shadow_threshold();
+
+  // Pass 2: rows [begin, end) solved band by band with `threshold`, as one
+  // result of end - begin rows; their angular error against the ground
+  // truth is added to `error` when the stack has one.
+  SolveResult solve_rows(int begin, int end, const ShadowThreshold& threshold, AngularErrorAccumulator& error,
+                         bool& has_ground_truth);
+
+  // summary.json's radiometry, lights (known after solve_rows), calibration, bands and crop.
+  nlohmann::json describe() const;
+  // The region solved (--crop, else the whole image): rows count from its top.
+  cv::Size size() const { return region_.size(); }
+  // Gives the solver a progress report (SolveSettings::set_progress), for the pixels of `mask_pixels(...)`.
+  void set_progress(const SolveProgress& progress) { settings_.set_progress(progress); }
+  // The mask pixels of rows [begin, end) of the region.
+  std::size_t mask_pixels(int begin, int end) const;
+
+ private:
+  using BandVisit = std::function<void(ImageStack& band, Observations& observations, int y0)>;
+  void for_each_band(int begin, int end, const BandVisit& visit);
+
+  std::filesystem::path input_;
+  SolveSettings settings_;
+  SolveCalibration calibration_;
+  io::StackBands& stack_;
+  BandPlan plan_;
+  cv::Rect region_;
+  ImageStack meta_;  // the region's mask
+  StackResponse response_;
+  std::optional<calibration::StackCalibration> applied_;
+  cv::Mat background_;
+  nlohmann::json light_model_;
+};
+
+// Writes the solve folder of a result made of bands: the maps, summary.json
+// with `extra` and the error, and the report (without per-light statistics,
+// which would read the whole stack at once). Throws InputError, writing
+// nothing, when no pixel was solved.
+SolveReport write_band_solve(const std::filesystem::path& input, const std::filesystem::path& out,
+                             const SolveResult& result, nlohmann::json extra,
+                             const std::optional<AngularErrorStats>& error);
+
+}  // namespace lightstage::pipeline::bands
