@@ -129,7 +129,8 @@ TEST(SolveTiles, WhatWouldMixRunsIsRefusedByName) {
               HasSubstr("solved by another run (method \"robust\" there, \"l1\" here)"));
   EXPECT_FALSE(fs::exists(out / "summary.json"));
   // A damaged part is named, and how to mend it.
-  std::ofstream(out / "tiles" / "part-0-of-3" / "part.json") << R"({"format": "lightstage solve tile part 1"})";
+  std::ofstream(out / "tiles" / "part-0-of-3" / "part.json")
+      << R"({"format": "lightstage solve tile part 1"})";
   EXPECT_THAT(error_of([&] { solve_tile(stack, robust, out, {}, "merge"); }),
               HasSubstr("part-0-of-3/part.json: [json.exception"));
   std::ofstream(out / "tiles" / "part-0-of-3" / "part.json") << "{not json";

@@ -167,10 +167,12 @@ json read_part_json(const fs::path& folder) {
   json j = read_json_file(file, kPartFormat);
   try {
     const json& tile = j.at("tile");
-    for (const char* key : {"index", "count", "first_row", "rows"}) static_cast<void>(tile.at(key).get<int>());
+    for (const char* key : {"index", "count", "first_row", "rows"})
+      static_cast<void>(tile.at(key).get<int>());
     if (j.at("width").get<int>() <= 0 || j.at("height").get<int>() <= 0 || !j.at("describe").is_object() ||
         !j.at("shadow_threshold").is_object() || !j.at("key").is_object())
-      fail("{}: width, height, describe, shadow_threshold or key malformed: run its tile again", file.string());
+      fail("{}: width, height, describe, shadow_threshold or key malformed: run its tile again",
+           file.string());
   } catch (const json::exception& e) {
     fail("{}: {}: run its tile again", file.string(), e.what());
   }

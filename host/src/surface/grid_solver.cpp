@@ -38,13 +38,19 @@ void GridSystem::add_data(int r, int c, double d, double z) {
 namespace {
 
 // One level of the hierarchy: the operator only (right-hand sides travel).
+// The finest level reads the GridSystem's arrays in place (at 24 Mpx a copy
+// is 600 MB); coarser levels own theirs.
 struct Level {
   int rows = 0, cols = 0;
-  std::vector<std::uint8_t> inside;
-  std::vector<double> wx, wy, diag;
+  const std::uint8_t* inside = nullptr;
+  const double *wx = nullptr, *wy = nullptr, *diag = nullptr;
   std::vector<double> inv_total;  // 1 / (d_i + Σ w), 0 where the row is empty
 
-  std::size_t size() const { return inside.size(); }
+  std::size_t size() const { return static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols); }
+
+  // Coarse levels: the arrays the pointers above read (a moved vector keeps its buffer).
+  std::vector<std::uint8_t> own_inside;
+  std::vector<double> own_wx, own_wy, own_diag;
 };
 
 void finish_level(Level& l) {
@@ -103,21 +109,27 @@ Level coarsen(const Level& f) {
   c.rows = (f.rows + 1) / 2;
   c.cols = (f.cols + 1) / 2;
   const std::size_t n = static_cast<std::size_t>(c.rows) * c.cols;
-  c.inside.assign(n, 0);
-  c.wx.assign(n, 0.0);
-  c.wy.assign(n, 0.0);
-  c.diag.assign(n, 0.0);
+  std::vector<std::uint8_t>& inside = c.own_inside;
+  std::vector<double>&wx = c.own_wx, &wy = c.own_wy, &diag = c.own_diag;
+  inside.assign(n, 0);
+  wx.assign(n, 0.0);
+  wy.assign(n, 0.0);
+  diag.assign(n, 0.0);
   for (int r = 0; r < f.rows; ++r) {
     for (int col = 0; col < f.cols; ++col) {
       const std::size_t i = static_cast<std::size_t>(r) * f.cols + col;
       if (!f.inside[i]) continue;
       const std::size_t ci = static_cast<std::size_t>(r / 2) * c.cols + col / 2;
-      c.inside[ci] = 1;
-      c.diag[ci] += f.diag[i];
-      if (f.wx[i] != 0 && (col % 2) == 1) c.wx[ci] += f.wx[i];
-      if (f.wy[i] != 0 && (r % 2) == 1) c.wy[ci] += f.wy[i];
+      inside[ci] = 1;
+      diag[ci] += f.diag[i];
+      if (f.wx[i] != 0 && (col % 2) == 1) wx[ci] += f.wx[i];
+      if (f.wy[i] != 0 && (r % 2) == 1) wy[ci] += f.wy[i];
     }
   }
+  c.inside = inside.data();
+  c.wx = wx.data();
+  c.wy = wy.data();
+  c.diag = diag.data();
   finish_level(c);
   return c;
 }
@@ -139,18 +151,14 @@ class Multigrid {
   const Level& fine() const { return levels_.front(); }
 
   // z ≈ A⁻¹ r: one symmetric V-cycle from zero.
-  void precondition(const std::vector<double>& r, std::vector<double>& z) {
-    work_b_[0] = r;
-    cycle(0);
-    z = work_x_[0];
-  }
+  void precondition(const std::vector<double>& r, std::vector<double>& z) { cycle(0, r, z); }
 
  private:
   static constexpr std::size_t kDirectUnknowns = 3000;
   static constexpr int kSweeps = 2;
 
   static std::size_t unknowns(const Level& l) {
-    return static_cast<std::size_t>(std::count(l.inside.begin(), l.inside.end(), 1));
+    return static_cast<std::size_t>(std::count(l.inside, l.inside + l.size(), 1));
   }
 
   void build_direct(const Level& l) {
@@ -199,10 +207,9 @@ class Multigrid {
       if (direct_index_[i] >= 0) x[i] = sol[direct_index_[i]];
   }
 
-  void cycle(std::size_t k) {
+  // x ≈ A_k⁻¹ b on level k.
+  void cycle(std::size_t k, const std::vector<double>& b, std::vector<double>& x) {
     const Level& l = levels_[k];
-    std::vector<double>& b = work_b_[k];
-    std::vector<double>& x = work_x_[k];
     if (k + 1 == levels_.size()) {
       solve_direct(l, b, x);
       return;
@@ -221,7 +228,7 @@ class Multigrid {
         if (l.inside[i]) cb[static_cast<std::size_t>(r / 2) * c.cols + col / 2] += b[i] - res[i];
       }
     }
-    cycle(k + 1);
+    cycle(k + 1, cb, work_x_[k + 1]);
     // Prolong (copy the block value: P). Plain aggregation under-corrects
     // smooth errors; the over-relaxation factor is the usual remedy.
     const std::vector<double>& cx = work_x_[k + 1];
@@ -256,20 +263,20 @@ GridSolveStats solve_grid(const GridSystem& system, std::vector<double>& x, doub
   Level fine;
   fine.rows = system.rows;
   fine.cols = system.cols;
-  fine.inside = system.inside;
-  fine.wx = system.wx;
-  fine.wy = system.wy;
-  fine.diag = system.diag;
-  const std::size_t n = fine.inside.size();
+  fine.inside = system.inside.data();
+  fine.wx = system.wx.data();
+  fine.wy = system.wy.data();
+  fine.diag = system.diag.data();
+  const std::size_t n = fine.size();
   if (x.size() != n) x.assign(n, 0.0);
-  for (std::size_t i = 0; i < n; ++i)
+  double b_squared = 0;  // b: the right-hand side, 0 outside
+  for (std::size_t i = 0; i < n; ++i) {
     if (!fine.inside[i]) x[i] = 0;
-  std::vector<double> b = system.rhs;
-  for (std::size_t i = 0; i < n; ++i)
-    if (!fine.inside[i]) b[i] = 0;
+    if (fine.inside[i]) b_squared += system.rhs[i] * system.rhs[i];
+  }
 
   GridSolveStats stats;
-  const double b_norm = std::sqrt(dot(b, b));
+  const double b_norm = std::sqrt(b_squared);
   if (b_norm == 0) {
     std::fill(x.begin(), x.end(), 0.0);
     stats.converged = true;
@@ -279,7 +286,7 @@ GridSolveStats solve_grid(const GridSystem& system, std::vector<double>& x, doub
   const Level& l = mg.fine();
   std::vector<double> r(n), z, p, q;
   apply(l, x, q);
-  for (std::size_t i = 0; i < n; ++i) r[i] = b[i] - q[i];
+  for (std::size_t i = 0; i < n; ++i) r[i] = fine.inside[i] ? system.rhs[i] - q[i] : 0.0;
   mg.precondition(r, z);
   p = z;
   double rz = dot(r, z);
