@@ -48,7 +48,11 @@ void write_report(const fs::path& file, const BatchReport& report) {
   {
     std::ofstream stream(temporary);
     stream << report.to_json().dump(2) << "\n";
-    if (!stream.flush()) fail("{}: cannot write it", file.string());
+    if (!stream.flush()) {
+      std::error_code ignored;
+      fs::remove(temporary, ignored);
+      fail("{}: cannot write it", file.string());
+    }
   }
   fs::rename(temporary, file);
 }

@@ -10,7 +10,6 @@
 #include "lightstage/pipeline/memory_budget.hpp"
 
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <charconv>
 #include <fstream>
