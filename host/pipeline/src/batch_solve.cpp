@@ -1,8 +1,9 @@
 #include "lightstage/pipeline/batch_solve.hpp"
 
+#include "json_file.hpp"
+
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
-#include "lightstage/common/temporary_path.hpp"
 #include "lightstage/host/io/output_folder.hpp"
 
 #include <algorithm>
@@ -41,20 +42,6 @@ bool finished(const fs::path& result, const fs::path& stack, const std::string& 
     return false;
   summary = std::move(j);
   return true;
-}
-
-void write_report(const fs::path& file, const BatchReport& report) {
-  const fs::path temporary = temporary_sibling(file);
-  {
-    std::ofstream stream(temporary);
-    stream << report.to_json().dump(2) << "\n";
-    if (!stream.flush()) {
-      std::error_code ignored;
-      fs::remove(temporary, ignored);
-      fail("{}: cannot write it", file.string());
-    }
-  }
-  fs::rename(temporary, file);
 }
 
 }  // namespace
@@ -126,7 +113,7 @@ BatchReport solve_batch(const fs::path& input, const SolveSettings& settings, co
     }
     outcome.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     report.captures.push_back(std::move(outcome));
-    write_report(out / "batch.json", report);
+    write_json_file(out / "batch.json", report.to_json(), 2);
     if (progress) progress(report.captures.back(), i, captures.size());
   }
   return report;

@@ -1,6 +1,7 @@
 #include "lightstage/pipeline/solve_tiles.hpp"
 
 #include "band_solver.hpp"
+#include "json_file.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
 #include "lightstage/common/temporary_path.hpp"
@@ -64,20 +65,6 @@ json read_json_file(const fs::path& path, const char* format) {
     fail("{}: not a '{}' file (written by another version, or damaged): run the step that wrote it again",
          path.string(), format);
   return j;
-}
-
-void write_json_file(const fs::path& path, const json& j) {
-  const fs::path temporary = temporary_sibling(path);
-  {
-    std::ofstream stream(temporary);
-    stream << j.dump(1) << "\n";
-    if (!stream.flush()) {
-      std::error_code ignored;
-      fs::remove(temporary, ignored);
-      fail("{}: cannot write it", path.string());
-    }
-  }
-  fs::rename(temporary, path);
 }
 
 // The differences between two keys, as "field: 'a' here, 'b' there".
