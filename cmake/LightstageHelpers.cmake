@@ -10,7 +10,8 @@ function(lightstage_library name)
                                             $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_link_libraries(${name} PUBLIC ${ARG_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   target_compile_options(${name} PRIVATE ${LIGHTSTAGE_WARNINGS})
-  set_target_properties(${name} PROPERTIES LIGHTSTAGE_HEADER_DIR ${CMAKE_CURRENT_SOURCE_DIR}/include)
+  set_target_properties(${name} PROPERTIES LIGHTSTAGE_HEADER_DIR ${CMAKE_CURRENT_SOURCE_DIR}/include
+                                           UNITY_BUILD ${LIGHTSTAGE_UNITY_BUILD} UNITY_BUILD_BATCH_SIZE 6)
   lightstage_library_version(${name})
 endfunction()
 
@@ -31,7 +32,8 @@ function(lightstage_program name)
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS})
   target_compile_options(${name} PRIVATE ${LIGHTSTAGE_WARNINGS})
-  set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/bin)
+  set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/bin
+                                           UNITY_BUILD ${LIGHTSTAGE_UNITY_BUILD} UNITY_BUILD_BATCH_SIZE 6)
 endfunction()
 
 # lightstage_test(NAME SOURCES ... DEPS ... [LABELS ...]): a GoogleTest binary,

@@ -27,6 +27,15 @@ case "$flavour" in
                                           -DCMAKE_INSTALL_PREFIX=/usr) ;;
   *) echo "usage: $0 [release|sanitize|fuzz|arm64]" >&2; exit 2 ;;
 esac
+# Unity units (LIGHTSTAGE_UNITY_BUILD) make a whole-tree build a third shorter;
+# LIGHTSTAGE_UNITY_BUILD=OFF suits an edit-compile loop, which recompiles one file.
+args+=("-DLIGHTSTAGE_UNITY_BUILD=${LIGHTSTAGE_UNITY_BUILD:-ON}")
+# ccache (scripts/install-deps.sh installs it) reuses compiles across the build
+# folders of different clones: paths are hashed relative to the checkout.
+if command -v ccache >/dev/null 2>&1 && [ "${LIGHTSTAGE_CCACHE:-ON}" != OFF ]; then
+  args+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+  export CCACHE_BASEDIR=$root CCACHE_NOHASHDIR=true
+fi
 jobs=${LIGHTSTAGE_JOBS:-$(nproc)}
 cmake -S "$root" -B "$dir" -G Ninja "${args[@]}" >/dev/null
 target=()

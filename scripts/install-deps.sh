@@ -18,6 +18,7 @@ done
 
 packages=(
   build-essential cmake ninja-build pkg-config git
+  lld ccache  # faster links; compiles reused between builds and clones (scripts/build.sh)
   libeigen3-dev
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-photo-dev
   libopenexr-dev libraw-dev libpng-dev libtiff-dev libexiv2-dev

@@ -1,5 +1,6 @@
 #include "lightstage/firmware/controller.hpp"
 
+#include "lightstage/common/clock.hpp"
 #include "lightstage/common/log.hpp"
 #include "lightstage/firmware/led_request.hpp"
 #include "lightstage/firmware/realtime.hpp"
@@ -12,8 +13,6 @@
 
 namespace lightstage::firmware {
 namespace {
-
-double to_us(std::int64_t ns) { return static_cast<double>(ns) / 1000.0; }
 
 bool is_safety_stop(proto::Outcome why) { return why != proto::OK && why != proto::ABORTED_BY_HOST; }
 
@@ -168,7 +167,7 @@ std::vector<int> Controller::darken_now() {
     logger("firmware")->error("could not release the trigger: {}", e.what());
   }
   for (const auto& [id, held] : held_) {
-    safety_.record(id, to_us(held.on_ns), to_us(off_ns));
+    safety_.record(id, ns_to_us(held.on_ns), ns_to_us(off_ns));
     were_lit.push_back(id);
   }
   held_.clear();
@@ -196,7 +195,7 @@ std::optional<Refusal> Controller::set_leds(const proto::SetLeds& request) {
   std::map<int, double> allowed_us;  // newly lit LEDs and their budget
   for (const int id : wanted) {
     if (held_.contains(id)) continue;  // stays lit: its deadline stands
-    const double allowed = safety_.allowed_on_us(id, to_us(now));
+    const double allowed = safety_.allowed_on_us(id, ns_to_us(now));
     if (allowed < options_.min_hold_us) {
       if (!held_.empty()) start_hold();  // the previous state stands
       const LedLimits& limits = safety_.limits(id);
@@ -226,7 +225,7 @@ std::optional<Refusal> Controller::set_leds(const proto::SetLeds& request) {
     }
   }
   for (const auto& [id, held] : held_) {
-    if (!next.contains(id)) safety_.record(id, to_us(held.on_ns), to_us(changed_ns));
+    if (!next.contains(id)) safety_.record(id, ns_to_us(held.on_ns), ns_to_us(changed_ns));
   }
   held_ = std::move(next);
   note_leds(0, wanted);
@@ -257,12 +256,12 @@ void Controller::hold_job() {
       std::string detail;
       for (const int id : expired) {
         const HeldLed held = held_[id];
-        safety_.record(id, to_us(held.on_ns), to_us(off_ns));
+        safety_.record(id, ns_to_us(held.on_ns), ns_to_us(off_ns));
         held_.erase(id);
         const LedLimits& limits = safety_.limits(id);
         detail += fmt::format(
             "{}LED {} switched off after {:.0f} us (max_on_us {:.0f}, max_duty {} over {:.0f} us)",
-            detail.empty() ? "" : "; ", id, to_us(off_ns - held.on_ns), limits.max_on_us, limits.max_duty,
+            detail.empty() ? "" : "; ", id, ns_to_us(off_ns - held.on_ns), limits.max_on_us, limits.max_duty,
             limits.duty_window_us);
       }
       note_leds(0, remaining);

@@ -1,5 +1,6 @@
 #include "lightstage/firmware/sequencer.hpp"
 
+#include "lightstage/common/clock.hpp"
 #include "lightstage/common/log.hpp"
 #include "lightstage/firmware/led_request.hpp"
 
@@ -14,7 +15,6 @@ namespace {
 
 constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::max();
 
-double to_us(std::int64_t ns) { return static_cast<double>(ns) / 1000.0; }
 std::int64_t us_to_ns(double us) { return std::llround(us * 1000.0); }
 
 double strobe_timeout_us(const Rig& rig, const proto::Step& step) {
@@ -87,7 +87,7 @@ class SequenceRun {
     const double need_us = sequencer_.worst_case_on_us(step);
     double allowed_us = std::numeric_limits<double>::infinity();
     for (const int id : ids) {
-      const double allowed = safety_.allowed_on_us(id, to_us(now));
+      const double allowed = safety_.allowed_on_us(id, ns_to_us(now));
       if (allowed < need_us) {
         return end_step(
             proto::SAFETY_LIMIT,
@@ -224,7 +224,7 @@ class SequenceRun {
     dark_staged_ = false;
     stage_dark_pending_ = false;
     event_.set_leds_off_ns(off_ns);
-    for (const int id : lit_) safety_.record(id, to_us(lit_since_ns_), to_us(off_ns));
+    for (const int id : lit_) safety_.record(id, ns_to_us(lit_since_ns_), ns_to_us(off_ns));
     lit_.clear();
     forced_off_ns_ = kNever;
     notify_leds();
@@ -235,7 +235,7 @@ class SequenceRun {
       return end_step(
           proto::SAFETY_LIMIT,
           fmt::format("step {}: LEDs reached their on-time limit after {:.0f} us and were switched off",
-                      step_index_, to_us(clock_.now_ns() - lit_since_ns_)));
+                      step_index_, ns_to_us(clock_.now_ns() - lit_since_ns_)));
     }
     return end_step(stop_.why(), stop_.detail());
   }
@@ -381,14 +381,14 @@ std::optional<Refusal> Sequencer::check_against(const proto::Sequence& sequence,
     }
     const double on_us = worst_case_on_us(step);
     for (const int id : lit_leds(step)) {
-      const SafetyVerdict verdict = safety.check(id, to_us(t_ns), on_us);
+      const SafetyVerdict verdict = safety.check(id, ns_to_us(t_ns), on_us);
       if (!verdict.allowed) {
         return Refusal{proto::Error::SAFETY_LIMIT,
                        fmt::format("sequence {}: step {}{}: {}", sequence.id(), i,
                                    step.wait_strobe() ? " (closed loop, counted at its strobe timeout)" : "",
                                    verdict.reason)};
       }
-      safety.record(id, to_us(t_ns), to_us(t_ns) + on_us);
+      safety.record(id, ns_to_us(t_ns), ns_to_us(t_ns) + on_us);
     }
     t_ns += us_to_ns(on_us + step.gap_us());
   }

@@ -4,6 +4,7 @@
 #include "lightstage/host/io/rti_files.hpp"
 #include "lightstage/testing/paths.hpp"
 #include "lightstage/testing/run.hpp"
+#include "lightstage/testing/sanitizers.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -87,6 +88,7 @@ TEST(ExportFromSolve, FollowsTheSolveToItsStack) {
 }
 
 TEST(RelightHoldout, ReportsEveryModelLikeBenchHoldout) {
+  LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("ExportFromSolve.FollowsTheSolveToItsStack");
   const auto dir = testing::scratch_dir();
   const auto stack = simulate(dir, "sphere");
   auto run = run_lightstage({"relight", "--holdout", "--input", stack.string(), "--held-out", "3",

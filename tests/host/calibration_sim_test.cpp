@@ -14,6 +14,7 @@
 #include "lightstage/sim/simulate.hpp"
 #include "lightstage/testing/errors.hpp"
 #include "lightstage/testing/paths.hpp"
+#include "lightstage/testing/sanitizers.hpp"
 
 #include <gtest/gtest.h>
 
@@ -102,6 +103,7 @@ TEST_F(CalibrationSim, DistantChromeSphereDirectionsWithinATenthOfADegree) {
 // Near lights (the LEDs 400 mm away, the sphere 40 mm): mirror directions are
 // off by degrees; one sphere position plus the dome radius puts them right.
 TEST_F(CalibrationSim, NearChromeSphereWithDomeRadiusWithinATenthOfADegree) {
+  LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("CalibrationSim.DistantChromeSphereDirectionsWithinATenthOfADegree");
   const fs::path dir = testing::scratch_dir();
   write_sim_stack(*rig_, "chrome-probe", sim::LightModel::kNear, dir / "chrome");
   LightCalibrationOptions o;
@@ -134,6 +136,7 @@ TEST_F(CalibrationSim, NearChromeSphereWithDomeRadiusWithinATenthOfADegree) {
 // (20 mm spheres at ±30 mm: σ 5.5 mm, worst error 5.7 mm). The reported
 // per-LED uncertainty must match the errors.
 TEST_F(CalibrationSim, TwoSpherePositionsTriangulateLedsWithinOnePercentOfTheRadius) {
+  LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("CalibrationSim.DistantChromeSphereDirectionsWithinATenthOfADegree");
   const fs::path dir = testing::scratch_dir();
   const fs::path left = scene_file(dir, "left", chrome_sphere_yaml(25, Vec3(-25, 0, 0)));
   const fs::path right = scene_file(dir, "right", chrome_sphere_yaml(25, Vec3(25, 0, 0)));

@@ -4,6 +4,7 @@
 #include "lightstage/common/child_process.hpp"
 #include "lightstage/testing/paths.hpp"
 #include "lightstage/testing/run.hpp"
+#include "lightstage/testing/sanitizers.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -89,6 +90,7 @@ TEST(DemoIntegration, CalibratesCapturesSolvesAndReportsThroughThreeProcesses) {
 // on the remote port (random shutter lag, card delays, lost files), its DNGs
 // taken from a folder, normals within 1.2x the sim: camera's error.
 TEST(DemoIntegration, ADslrOnTheRemotePortSolvesAsWellAsTheSimCamera) {
+  LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("CaptureIntegration.DslrFilesFindTheirLedsAndAKilledHostResumes");
   const fs::path dir = scratch_dir();
   const auto demo = [&](const std::string& camera, const fs::path& rig) {
     const RunResult run = run_lightstage({"demo", "--camera", camera, "--rig", rig.string(), "--scene",

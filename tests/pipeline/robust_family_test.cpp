@@ -13,6 +13,7 @@
 #include "lightstage/host/radiometry.hpp"
 #include "lightstage/pipeline/solve_methods.hpp"
 #include "lightstage/sim/simulate.hpp"
+#include "lightstage/testing/sanitizers.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -52,6 +53,7 @@ double mean_error(const Scene& scene, const std::string& method) {
 class RobustFamily : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(RobustFamily, EveryRobustMethodReachesTenthsOfADegree) {
+  LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("test_host_robust_family_solvers");
   const Scene scene = render(GetParam());
   std::map<std::string, double> errors;
   for (const std::string method : {"l2", "robust", "rpca", "l1", "sbl", "auto"}) {

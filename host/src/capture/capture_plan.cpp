@@ -1,6 +1,7 @@
 #include "lightstage/host/capture/capture_plan.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/host/capture/hdr_merge.hpp"
 
 #include <opencv2/core.hpp>
 
@@ -10,9 +11,6 @@
 
 namespace lightstage {
 namespace {
-
-// A raw value at or above this share of full scale counts as clipped (as in hdr_merge).
-constexpr double kClippedShare = 0.98;
 
 // The index of `exposure_us` in the sorted, distinct `exposures_us` (it is there).
 std::size_t index_of(const std::vector<double>& exposures_us, double exposure_us) {

@@ -5,6 +5,7 @@
 #include "lightstage/host/capture/capture_plan.hpp"
 #include "lightstage/host/capture/frame_matcher.hpp"
 #include "lightstage/host/capture/shot_matcher.hpp"
+#include "util/elapsed.hpp"
 
 #include <fmt/format.h>
 
@@ -21,8 +22,6 @@ namespace lightstage {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 std::string led_name(int id) { return id < 0 ? std::string("dark") : fmt::format("LED {}", id); }
 

@@ -7,6 +7,7 @@
 #include "lightstage/host/capture/stack_writer.hpp"
 #include "lightstage/host/io/output_folder.hpp"
 #include "lightstage/host/progress.hpp"
+#include "util/elapsed.hpp"
 
 #include <fmt/format.h>
 
@@ -21,8 +22,6 @@ namespace lightstage {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // The camera is stopped however the capture ends.
 struct StopCamera {

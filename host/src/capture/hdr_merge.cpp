@@ -97,7 +97,8 @@ HdrMerge merge_hdr(const std::vector<HdrSample>& samples, const HdrMergeOptions&
   }
   const double full = type_full_scale(first.depth());
   const double sensor_full = options.sensor_full_scale > 0 ? options.sensor_full_scale : full;
-  const double saturation_dn = options.saturation_dn > 0 ? options.saturation_dn : 0.98 * sensor_full;
+  const double saturation_dn =
+      options.saturation_dn > 0 ? options.saturation_dn : kClippedShare * sensor_full;
   std::vector<float> table;
   if (options.response != nullptr) {
     table.resize(static_cast<std::size_t>(full) + 1);

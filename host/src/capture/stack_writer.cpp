@@ -21,9 +21,6 @@ namespace {
 
 double full_scale(const camera::Frame& f) { return std::ldexp(1.0, f.bit_depth) - 1; }
 
-// A raw value at or above this share of full scale counts as clipped.
-constexpr double kClippedShare = 0.98;
-
 // The camera's stamps of a frame and the controller's of its step.
 nlohmann::json stamps(const Taken& taken) {
   nlohmann::json out = {{"frame_sequence", taken.frame.sequence},

@@ -16,8 +16,6 @@
 namespace lightstage::io {
 namespace {
 
-constexpr int kMaxSide = 16'384;
-
 // relight's term k is our term order()[k]. PTM: relight evaluates
 // 1, x, y, x², xy, y²; ours (the .ptm order) is x², y², xy, x, y, 1.
 // HSH: the same order in both.
@@ -158,8 +156,8 @@ RelightInfo parse_relight_info(const std::string& text, const std::string& sourc
     return it->get<std::string>();
   };
   RelightInfo info;
-  info.width = integer("width", 1, kMaxSide);
-  info.height = integer("height", 1, kMaxSide);
+  info.width = integer("width", 1, kMaxRtiSide);
+  info.height = integer("height", 1, kMaxRtiSide);
   info.type = string("type", nullptr);
   if (info.type != "ptm" && info.type != "hsh")
     fail("{}: type: '{}' is not ptm or hsh (the bases read here)", source, info.type.substr(0, 40));

@@ -14,8 +14,6 @@
 namespace lightstage::io {
 namespace {
 
-constexpr int kMaxSide = 16'384;
-
 int pixel_count(const RtiImage& image) { return image.width * image.height; }
 
 // PTM stores rows bottom to top: file pixel i is image pixel at this index.
@@ -82,8 +80,8 @@ struct Reader {
 };
 
 void check_size(int w, int h, const std::string& source) {
-  if (w <= 0 || h <= 0 || w > kMaxSide || h > kMaxSide)
-    fail("{}: size: {}x{} is outside 1..{}", source, w, h, kMaxSide);
+  if (w <= 0 || h <= 0 || w > kMaxRtiSide || h > kMaxRtiSide)
+    fail("{}: size: {}x{} is outside 1..{}", source, w, h, kMaxRtiSide);
 }
 
 std::uint8_t clamp_byte(double v) { return static_cast<std::uint8_t>(std::clamp(std::lround(v), 0L, 255L)); }

@@ -22,11 +22,6 @@ namespace fs = std::filesystem;
 // Open files beside the frames': the process's own, the outputs being written.
 constexpr std::size_t kSpareFiles = 64;
 
-bool file_exists(const fs::path& path) {
-  std::error_code error;
-  return fs::exists(path, error);
-}
-
 }  // namespace
 
 StackBands::StackBands(const fs::path& dir, const LoadOptions& options) : dir_(dir), options_(options) {

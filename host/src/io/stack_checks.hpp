@@ -17,6 +17,12 @@
 
 namespace lightstage::io {
 
+// Whether `path` exists; an unreadable parent counts as "no".
+inline bool file_exists(const std::filesystem::path& path) {
+  std::error_code error;
+  return std::filesystem::exists(path, error);
+}
+
 // Refuses more than kMaxStackImages entries and a name listed twice.
 void check_listed_names(const std::filesystem::path& names_path, const std::vector<TextLine>& names);
 

@@ -27,11 +27,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-bool file_exists(const fs::path& path) {
-  std::error_code error;
-  return fs::exists(path, error);
-}
-
 std::string size_text(const cv::Mat& image) { return fmt::format("{}x{}", image.cols, image.rows); }
 
 std::string type_text(const cv::Mat& image) { return image_type_text(image.type()); }

@@ -34,7 +34,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kDeg = 180.0 / std::numbers::pi;
 constexpr double kDefaultShadowThreshold = 0.02;
 
 nlohmann::json read_json_file(const fs::path& path) {

@@ -13,8 +13,6 @@ namespace lightstage::report {
 
 namespace {
 
-constexpr double kDeg = 180.0 / std::numbers::pi;
-
 std::string css_colour(const cv::Vec3b& bgr) {
   return fmt::format("#{:02x}{:02x}{:02x}", bgr[2], bgr[1], bgr[0]);
 }

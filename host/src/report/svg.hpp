@@ -4,10 +4,14 @@
 
 #include "lightstage/common/geometry.hpp"
 
+#include <numbers>
 #include <string>
 #include <vector>
 
 namespace lightstage::report {
+
+// Degrees per radian.
+inline constexpr double kDeg = 180.0 / std::numbers::pi;
 
 struct PlotLight {
   Vec3 direction = Vec3::UnitZ();  // object -> light, camera frame (x right, y up, z to the camera)

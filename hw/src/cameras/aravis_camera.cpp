@@ -65,7 +65,7 @@ template <typename T>
 struct Unref {
   void operator()(T* p) const { g_object_unref(p); }
 };
-using CameraPtr = std::unique_ptr<ArvCamera, Unref<ArvCamera>>;
+using ArvCameraPtr = std::unique_ptr<ArvCamera, Unref<ArvCamera>>;
 using StreamPtr = std::unique_ptr<ArvStream, Unref<ArvStream>>;
 
 // A GError the called function may set; freed on scope exit.
@@ -711,7 +711,7 @@ class AravisCamera final : public camera::Camera {
     return frame;
   }
 
-  CameraPtr camera_;
+  ArvCameraPtr camera_;
   gulong control_lost_handler_ = 0;
   std::atomic<bool> control_lost_{false};  // set on aravis's heartbeat thread
   std::string id_;

@@ -46,7 +46,7 @@ using PortListPtr = std::unique_ptr<GPPortInfoList, Releaser<gp_port_info_list_f
 using AbilitiesListPtr = std::unique_ptr<CameraAbilitiesList, Releaser<gp_abilities_list_free>>;
 using WidgetPtr = std::unique_ptr<CameraWidget, Releaser<gp_widget_free>>;
 using FilePtr = std::unique_ptr<CameraFile, Releaser<gp_file_unref>>;
-using CameraPtr = std::unique_ptr<Camera, Releaser<gp_camera_unref>>;
+using GpCameraPtr = std::unique_ptr<Camera, Releaser<gp_camera_unref>>;
 using ContextPtr = std::unique_ptr<GPContext, Releaser<gp_context_unref>>;
 using EventData = std::unique_ptr<void, Releaser<std::free>>;
 
@@ -375,7 +375,7 @@ class Gphoto2Source final : public camera::ShotSource {
     Camera* raw_camera = nullptr;
     if (const int code = gp_camera_new(&raw_camera); code < GP_OK)
       throw_gp(uri(), "create a camera", code, context_.take());
-    CameraPtr camera(raw_camera);
+    GpCameraPtr camera(raw_camera);
     if (const int code = gp_camera_set_abilities(camera.get(), abilities); code < GP_OK)
       throw_gp(uri(), "set the camera's driver", code, context_.take());
     if (const int code = gp_camera_set_port_info(camera.get(), port_info); code < GP_OK)
@@ -527,7 +527,7 @@ class Gphoto2Source final : public camera::ShotSource {
   }
 
   Context context_;  // declared first: the camera is closed through it
-  CameraPtr camera_;
+  GpCameraPtr camera_;
   std::filesystem::path download_dir_;
   std::string model_;
   std::string port_;

@@ -16,13 +16,6 @@ namespace pb = lightstage::proto::simcam;
 
 constexpr double kMinExposureUs = 10, kMaxExposureUs = 10'000'000;
 constexpr double kMinGain = 0.1, kMaxGain = 16;
-// How long after a window ends the chip may still be receiving changes stamped
-// inside it (the firmware stamps, then sends).
-constexpr std::int64_t kSettleNs = 5'000'000, kCatchUpNs = 50'000'000;
-
-std::chrono::steady_clock::time_point steady_at(std::int64_t t_ns) {
-  return std::chrono::steady_clock::time_point(std::chrono::nanoseconds(t_ns));  // CLOCK_MONOTONIC on Linux
-}
 
 }  // namespace
 
@@ -75,9 +68,9 @@ void CameraService::run_exposures(std::stop_token stop) {
       exposure = pending_.front();
       pending_.pop_front();
       // Wait for the window to pass and for the chip to catch up with it.
-      changed_.wait_until(lock, stop, steady_at(exposure.end_ns + kSettleNs), [] { return false; });
+      changed_.wait_until(lock, stop, steady_at(exposure.end_ns + kWindowSettleNs), [] { return false; });
       while (!stop.stop_requested() && tracker_->latest_ns() < exposure.end_ns &&
-             monotonic_now_ns() < exposure.end_ns + kCatchUpNs) {
+             monotonic_now_ns() < exposure.end_ns + kWindowCatchUpNs) {
         changed_.wait_for(lock, stop, std::chrono::milliseconds(1), [] { return false; });
       }
       if (stop.stop_requested()) return;

@@ -19,17 +19,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// How long after a window ends the chip may still be receiving changes stamped
-// inside it (the firmware stamps, then sends): as the `sim:` camera waits.
-constexpr std::int64_t kSettleNs = 5'000'000, kCatchUpNs = 50'000'000;
 // A raw file's black level when the sensor model has none.
 constexpr double kDefaultBlackLevel = 512;
 // The camera never looks further back than this before a shot's exposure.
 constexpr std::int64_t kHistoryNs = 1'000'000'000;
-
-std::chrono::steady_clock::time_point steady_at(std::int64_t t_ns) {
-  return std::chrono::steady_clock::time_point(std::chrono::nanoseconds(t_ns));  // CLOCK_MONOTONIC on Linux
-}
 
 // The number in "IMG_<digits>[.ext]" (any case), or nullopt for any other name.
 std::optional<std::uint64_t> image_number(const std::string& name) {
@@ -240,9 +233,9 @@ void SimulatedDslr::run(std::stop_token stop) {
       if (stop.stop_requested()) return;
       shot = pending_.front();
       // Wait for the window to pass and for the chip to catch up with it.
-      changed_.wait_until(lock, stop, steady_at(shot.end_ns + kSettleNs), [] { return false; });
+      changed_.wait_until(lock, stop, steady_at(shot.end_ns + kWindowSettleNs), [] { return false; });
       while (!stop.stop_requested() && tracker_->latest_ns() < shot.end_ns &&
-             monotonic_now_ns() < shot.end_ns + kCatchUpNs) {
+             monotonic_now_ns() < shot.end_ns + kWindowCatchUpNs) {
         changed_.wait_for(lock, stop, std::chrono::milliseconds(1), [] { return false; });
       }
       if (stop.stop_requested()) return;

@@ -25,4 +25,7 @@ class MonotonicClock final : public Clock {
 
 std::int64_t monotonic_now_ns();
 
+// Nanoseconds as microseconds, for messages and the wire protocol's _us fields.
+inline double ns_to_us(std::int64_t ns) { return static_cast<double>(ns) / 1000.0; }
+
 }  // namespace lightstage

@@ -33,6 +33,9 @@
 
 namespace lightstage {
 
+// A raw value at or above this share of the sensor's full scale counts as clipped.
+inline constexpr double kClippedShare = 0.98;
+
 struct HdrSample {
   cv::Mat image;           // raw camera frame: CV_8U or CV_16U, any channel count
   cv::Mat dark;            // this exposure's dark, same size and channels; linear domain
@@ -41,7 +44,7 @@ struct HdrSample {
 };
 
 struct HdrMergeOptions {
-  double saturation_dn = 0;      // raw values at or above are clipped; 0 = 0.98 · sensor_full_scale
+  double saturation_dn = 0;      // raw values at or above are clipped; 0 = kClippedShare · sensor_full_scale
   double sensor_full_scale = 0;  // the sensor's largest raw value (2^bits − 1); 0 = the type's
   const InverseResponse* response = nullptr;  // set for cameras that are not linear
 

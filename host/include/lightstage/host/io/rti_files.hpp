@@ -14,6 +14,9 @@
 
 namespace lightstage::io {
 
+// The largest width or height an RTI file or relight folder may declare.
+inline constexpr int kMaxRtiSide = 16'384;
+
 // A fitted RTI in memory: per colour channel (r, g, b) a pixels × terms
 // matrix, pixels row-major with row 0 the top of the image.
 struct RtiImage {

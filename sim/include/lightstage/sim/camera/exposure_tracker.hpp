@@ -6,6 +6,7 @@
 
 #include "lightstage/sim/gpio/timeline.hpp"
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -16,6 +17,16 @@
 #include <vector>
 
 namespace lightstage::sim {
+
+// How long after a window ends the chip may still be receiving changes stamped
+// inside it (the firmware stamps, then sends): a camera waits this long before
+// reading the window, and at most the second before it takes what it has.
+inline constexpr std::int64_t kWindowSettleNs = 5'000'000, kWindowCatchUpNs = 50'000'000;
+
+// A CLOCK_MONOTONIC time (the chip's stamps) as a steady_clock time point: the same clock on Linux.
+inline std::chrono::steady_clock::time_point steady_at(std::int64_t t_ns) {
+  return std::chrono::steady_clock::time_point(std::chrono::nanoseconds(t_ns));
+}
 
 class ExposureTracker final : public gpio::TimelineSink {
  public:
