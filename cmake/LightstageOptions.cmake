@@ -27,9 +27,9 @@ option(LIGHTSTAGE_SANITIZE "Build with AddressSanitizer and UndefinedBehaviorSan
 option(LIGHTSTAGE_FUZZ "Build libFuzzer targets (needs clang)" OFF)
 option(LIGHTSTAGE_WERROR "Treat warnings as errors" ON)
 # Compiles each library's and program's sources a few at a time in one unit, so
-# the heavy headers (Eigen, OpenCV, CLI11, JSON) are parsed once per batch: the
-# whole-tree builds of scripts/test.sh turn it on; an edit-compile loop is faster
-# without it.
+# the heavy headers (Eigen, OpenCV, CLI11, JSON) are parsed once per batch.
+# scripts/build.sh turns it on (whole-tree builds); an edit-compile loop, which
+# recompiles one file, is faster without it.
 option(LIGHTSTAGE_UNITY_BUILD "Batch each library's and program's sources into unity units" OFF)
 
 # lld links in a quarter of GNU ld's time, and a build links over a hundred test

@@ -18,33 +18,12 @@ import argparse
 import json
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
-import time
+
+from bench_common import parse_size, run
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-UNITS = {"K": 1 << 10, "M": 1 << 20, "G": 1 << 30, "T": 1 << 40}
-
-
-def parse_size(text):
-    if text[-1].upper() in UNITS:
-        return int(float(text[:-1]) * UNITS[text[-1].upper()])
-    return int(text)
-
-
-def run(cmd):
-    """Runs cmd; returns (seconds, that child's own peak RSS in bytes, stdout)."""
-    start = time.monotonic()
-    with tempfile.TemporaryFile(mode="w+") as out:
-        child = subprocess.Popen(cmd, stdout=out)
-        _, status, usage = os.wait4(child.pid, 0)  # the child's own rusage, not every child's maximum
-        child.returncode = os.waitstatus_to_exitcode(status)
-        seconds = time.monotonic() - start
-        if child.returncode != 0:
-            raise SystemExit(f"{' '.join(cmd)}: exit status {child.returncode}")
-        out.seek(0)
-        return seconds, usage.ru_maxrss * 1024, out.read()
 
 
 def main():

@@ -30,8 +30,9 @@ esac
 # Unity units (LIGHTSTAGE_UNITY_BUILD) make a whole-tree build a third shorter;
 # LIGHTSTAGE_UNITY_BUILD=OFF suits an edit-compile loop, which recompiles one file.
 args+=("-DLIGHTSTAGE_UNITY_BUILD=${LIGHTSTAGE_UNITY_BUILD:-ON}")
-# ccache (scripts/install-deps.sh installs it) reuses compiles across the build
-# folders of different clones: paths are hashed relative to the checkout.
+# ccache (scripts/install-deps.sh installs it) reuses unchanged compiles between
+# builds; paths are hashed relative to the checkout, so a second clone reuses the
+# tests' compiles too (unity units name their sources by absolute path).
 if command -v ccache >/dev/null 2>&1 && [ "${LIGHTSTAGE_CCACHE:-ON}" != OFF ]; then
   args+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
   export CCACHE_BASEDIR=$root CCACHE_NOHASHDIR=true

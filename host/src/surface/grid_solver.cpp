@@ -16,7 +16,6 @@ GridSystem::GridSystem(int rows_, int cols_)
       inside(static_cast<std::size_t>(rows_) * cols_, 0),
       wx(inside.size(), 0.0),
       wy(inside.size(), 0.0),
-      diag(inside.size(), 0.0),
       rhs(inside.size(), 0.0) {}
 
 void GridSystem::add_edge(int r, int c, bool horizontal, double w, double g) {
@@ -31,6 +30,7 @@ void GridSystem::add_edge(int r, int c, bool horizontal, double w, double g) {
 
 void GridSystem::add_data(int r, int c, double d, double z) {
   const std::size_t i = index(r, c);
+  if (diag.empty()) diag.assign(inside.size(), 0.0);
   diag[i] += d;
   rhs[i] += d * z;
 }
@@ -43,10 +43,14 @@ namespace {
 struct Level {
   int rows = 0, cols = 0;
   const std::uint8_t* inside = nullptr;
-  const double *wx = nullptr, *wy = nullptr, *diag = nullptr;
-  std::vector<double> inv_total;  // 1 / (d_i + Σ w), 0 where the row is empty
+  const double *wx = nullptr, *wy = nullptr;
+  const double* diag = nullptr;  // nullptr = all 0
+  // 1 / (d_i + Σ w), 0 where the row is empty. Float: it only scales the
+  // smoother's steps, and at 24 Mpx the finest level's is then 100 MB less.
+  std::vector<float> inv_total;
 
   std::size_t size() const { return static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols); }
+  double diag_at(std::size_t i) const { return diag ? diag[i] : 0.0; }
 
   // Coarse levels: the arrays the pointers above read (a moved vector keeps its buffer).
   std::vector<std::uint8_t> own_inside;
@@ -59,28 +63,32 @@ void finish_level(Level& l) {
     for (int c = 0; c < l.cols; ++c) {
       const std::size_t i = static_cast<std::size_t>(r) * l.cols + c;
       if (!l.inside[i]) continue;
-      double t = l.diag[i] + l.wx[i] + l.wy[i];
+      double t = l.diag_at(i) + l.wx[i] + l.wy[i];
       if (c > 0) t += l.wx[i - 1];
       if (r > 0) t += l.wy[i - l.cols];
-      l.inv_total[i] = t > 0 ? 1.0 / t : 0.0;
+      l.inv_total[i] = t > 0 ? static_cast<float>(1.0 / t) : 0.0f;
     }
   }
 }
 
+// (A x)_i for the pixel i = (r, c), which is inside.
+double apply_at(const Level& l, const std::vector<double>& x, int r, int c, std::size_t i) {
+  const int cols = l.cols;
+  double v = l.diag_at(i) * x[i];
+  if (l.wx[i] != 0) v += l.wx[i] * (x[i] - x[i + 1]);
+  if (l.wy[i] != 0) v += l.wy[i] * (x[i] - x[i + cols]);
+  if (c > 0 && l.wx[i - 1] != 0) v += l.wx[i - 1] * (x[i] - x[i - 1]);
+  if (r > 0 && l.wy[i - cols] != 0) v += l.wy[i - cols] * (x[i] - x[i - cols]);
+  return v;
+}
+
 // y = A x.
 void apply(const Level& l, const std::vector<double>& x, std::vector<double>& y) {
-  const int cols = l.cols;
   y.assign(l.size(), 0.0);
   for (int r = 0; r < l.rows; ++r) {
-    for (int c = 0; c < cols; ++c) {
-      const std::size_t i = static_cast<std::size_t>(r) * cols + c;
-      if (!l.inside[i]) continue;
-      double v = l.diag[i] * x[i];
-      if (l.wx[i] != 0) v += l.wx[i] * (x[i] - x[i + 1]);
-      if (l.wy[i] != 0) v += l.wy[i] * (x[i] - x[i + cols]);
-      if (c > 0 && l.wx[i - 1] != 0) v += l.wx[i - 1] * (x[i] - x[i - 1]);
-      if (r > 0 && l.wy[i - cols] != 0) v += l.wy[i - cols] * (x[i] - x[i - cols]);
-      y[i] = v;
+    for (int c = 0; c < l.cols; ++c) {
+      const std::size_t i = static_cast<std::size_t>(r) * l.cols + c;
+      if (l.inside[i]) y[i] = apply_at(l, x, r, c, i);
     }
   }
 }
@@ -121,7 +129,7 @@ Level coarsen(const Level& f) {
       if (!f.inside[i]) continue;
       const std::size_t ci = static_cast<std::size_t>(r / 2) * c.cols + col / 2;
       inside[ci] = 1;
-      diag[ci] += f.diag[i];
+      diag[ci] += f.diag_at(i);
       if (f.wx[i] != 0 && (col % 2) == 1) wx[ci] += f.wx[i];
       if (f.wy[i] != 0 && (r % 2) == 1) wy[ci] += f.wy[i];
     }
@@ -145,7 +153,6 @@ class Multigrid {
     build_direct(levels_.back());
     work_b_.resize(levels_.size());
     work_x_.resize(levels_.size());
-    work_r_.resize(levels_.size());
   }
 
   const Level& fine() const { return levels_.front(); }
@@ -173,7 +180,7 @@ class Multigrid {
         const std::size_t i = static_cast<std::size_t>(r) * l.cols + c;
         if (!l.inside[i]) continue;
         const int a = direct_index_[i];
-        t.emplace_back(a, a, l.diag[i]);
+        t.emplace_back(a, a, l.diag_at(i));
         auto edge = [&](std::size_t j, double w) {
           if (w == 0) return;
           const int b = direct_index_[j];
@@ -216,16 +223,16 @@ class Multigrid {
     }
     x.assign(l.size(), 0.0);
     for (int s = 0; s < kSweeps; ++s) gauss_seidel(l, b, x, true);
-    // Restrict the residual (sum over each 2×2 block: Pᵀ).
-    std::vector<double>& res = work_r_[k];
-    apply(l, x, res);
+    // Restrict the residual (sum over each 2×2 block: Pᵀ), computed where it is
+    // summed: a residual vector would be another 8 bytes a pixel.
     const Level& c = levels_[k + 1];
     std::vector<double>& cb = work_b_[k + 1];
     cb.assign(c.size(), 0.0);
     for (int r = 0; r < l.rows; ++r) {
       for (int col = 0; col < l.cols; ++col) {
         const std::size_t i = static_cast<std::size_t>(r) * l.cols + col;
-        if (l.inside[i]) cb[static_cast<std::size_t>(r / 2) * c.cols + col / 2] += b[i] - res[i];
+        if (l.inside[i])
+          cb[static_cast<std::size_t>(r / 2) * c.cols + col / 2] += b[i] - apply_at(l, x, r, col, i);
       }
     }
     cycle(k + 1, cb, work_x_[k + 1]);
@@ -244,7 +251,7 @@ class Multigrid {
   static constexpr double kCoarseScale = 1.6;
 
   std::vector<Level> levels_;
-  std::vector<std::vector<double>> work_b_, work_x_, work_r_;
+  std::vector<std::vector<double>> work_b_, work_x_;
   std::vector<int> direct_index_;
   int direct_n_ = 0;
   std::unique_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>> direct_;
@@ -266,7 +273,7 @@ GridSolveStats solve_grid(const GridSystem& system, std::vector<double>& x, doub
   fine.inside = system.inside.data();
   fine.wx = system.wx.data();
   fine.wy = system.wy.data();
-  fine.diag = system.diag.data();
+  fine.diag = system.diag.empty() ? nullptr : system.diag.data();
   const std::size_t n = fine.size();
   if (x.size() != n) x.assign(n, 0.0);
   double b_squared = 0;  // b: the right-hand side, 0 outside

@@ -21,7 +21,7 @@ struct GridSystem {
   // Edge weights, index r·cols + c: wx joins (r, c)–(r, c+1), wy joins (r, c)–(r+1, c).
   // Must be 0 unless both ends are inside.
   std::vector<double> wx, wy;
-  std::vector<double> diag;  // d_i ≥ 0
+  std::vector<double> diag;  // d_i ≥ 0; empty until add_data (pure integration has none)
   std::vector<double> rhs;   // b
 
   GridSystem(int rows, int cols);
