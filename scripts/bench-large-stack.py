@@ -19,9 +19,8 @@ import json
 import os
 import shutil
 import sys
-import tempfile
 
-from bench_common import parse_size, run
+from bench_common import parse_size, run, work_folder
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -39,11 +38,9 @@ def main():
     parser.add_argument("--keep", action="store_true", help="keep --work afterwards")
     args = parser.parse_args()
 
-    work = args.work or tempfile.mkdtemp(prefix="lightstage-bench-")
-    os.makedirs(work, exist_ok=True)
     limit = parse_size(args.memory_limit)
     exe = args.lightstage
-    try:
+    with work_folder(args.work, args.keep, "lightstage-bench-") as work:
         stack = os.path.join(work, "stack")
         if not os.path.exists(os.path.join(stack, "filenames.txt")):
             cmd = [exe, "simulate", "--quiet", "--rig", os.path.join(ROOT, "hw/rigs/sim-dome.yaml"),
@@ -70,9 +67,6 @@ def main():
             within = "yes" if peak <= limit else "NO"
             print(f"{method:<10} {seconds:>9.2f} {seconds / floor['seconds']:>8.2f} {peak / 1e9:>7.2f} GB "
                   f"{bands:>6}  {within}")
-    finally:
-        if not args.keep and not args.work:
-            shutil.rmtree(work, ignore_errors=True)
 
 
 if __name__ == "__main__":

@@ -19,9 +19,8 @@ import json
 import os
 import shutil
 import sys
-import tempfile
 
-from bench_common import parse_size, run
+from bench_common import parse_size, run, work_folder
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RUNS = {
@@ -45,11 +44,9 @@ def main():
         if name not in RUNS:
             parser.error(f"--runs: '{name}' is not one of {', '.join(RUNS)}")
 
-    work = args.work or tempfile.mkdtemp(prefix="lightstage-bench-surface-")
-    os.makedirs(work, exist_ok=True)
     budget = parse_size(args.memory_budget)
     exe = args.lightstage
-    try:
+    with work_folder(args.work, args.keep, "lightstage-bench-surface-") as work:
         scene = os.path.join(work, "scene")
         normals = os.path.join(scene, "Normal_gt.png")
         if not os.path.exists(normals):
@@ -70,9 +67,6 @@ def main():
             within = "yes" if peak <= budget and seconds <= args.seconds else "NO"
             print(f"{name:<16} {pixels:>11} {seconds:>8.2f} {seconds / (pixels / 1e6):>6.2f} "
                   f"{peak / 1e9:>7.2f} GB {peak / pixels:>8.0f}  {within}")
-    finally:
-        if not args.keep and not args.work:
-            shutil.rmtree(work, ignore_errors=True)
 
 
 if __name__ == "__main__":

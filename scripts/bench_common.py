@@ -1,5 +1,7 @@
 """What the bench scripts share: sizes like 1.5G, and one child's time and peak memory."""
+import contextlib
 import os
+import shutil
 import subprocess
 import tempfile
 import time
@@ -25,3 +27,15 @@ def run(cmd):
             raise SystemExit(f"{' '.join(cmd)}: exit status {child.returncode}")
         out.seek(0)
         return seconds, usage.ru_maxrss * 1024, out.read()
+
+
+@contextlib.contextmanager
+def work_folder(work, keep, prefix):
+    """Yields --work, or a new temporary folder that is removed afterwards unless --keep."""
+    folder = work or tempfile.mkdtemp(prefix=prefix)
+    os.makedirs(folder, exist_ok=True)
+    try:
+        yield folder
+    finally:
+        if not keep and not work:
+            shutil.rmtree(folder, ignore_errors=True)
