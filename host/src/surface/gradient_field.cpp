@@ -118,6 +118,17 @@ cv::Mat solve_surface(const GradientField& field, const cv::Mat& data_weight, co
   for_each_edge(field, [&](const Edge&) { ++edge_count; });
   // Reweighting only: each edge's weight, in for_each_edge's order (1 = plain least squares).
   std::vector<double> weights;
+  // The Cauchy weights' scale (reweighting only; the same every round).
+  double sigma = options.scale;
+  if (options.reweight && sigma <= 0) {
+    double mean_g = 0;
+    for_each_edge(field, [&](const Edge& e) { mean_g += std::abs(e.g) / static_cast<double>(edge_count); });
+    // A fixed fraction of the typical gradient: residuals far above it are
+    // what no smooth surface explains. (The residuals' own spread is no
+    // guide: plain least squares smears a streak's error over everything.)
+    // The mean, not the median: flat background must not shrink it.
+    sigma = 0.07 * mean_g + 1e-9;
+  }
   std::vector<double> w;
   stats = SurfaceStats{};
   for (int r = 0; r < rows; ++r)
@@ -167,16 +178,6 @@ cv::Mat solve_surface(const GradientField& field, const cv::Mat& data_weight, co
     stats.relative_residual = s.relative_residual;
     if (last) break;
     // Cauchy weights from this round's residuals.
-    double sigma = options.scale;
-    if (sigma <= 0) {
-      double mean_g = 0;
-      for_each_edge(field, [&](const Edge& e) { mean_g += std::abs(e.g) / static_cast<double>(edge_count); });
-      // A fixed fraction of the typical gradient: residuals far above it are
-      // what no smooth surface explains. (The residuals' own spread is no
-      // guide: plain least squares smears a streak's error over everything.)
-      // The mean, not the median: flat background must not shrink it.
-      sigma = 0.07 * mean_g + 1e-9;
-    }
     weights.resize(edge_count);
     k = 0;
     for_each_edge(field, [&](const Edge& e) {
@@ -188,7 +189,10 @@ cv::Mat solve_surface(const GradientField& field, const cv::Mat& data_weight, co
   }
   report(1.0);
   double sum_sq = 0;
-  for_each_edge(field, [&](const Edge& e) { sum_sq += residual_of(e, w, cols) * residual_of(e, w, cols); });
+  for_each_edge(field, [&](const Edge& e) {
+    const double residual = residual_of(e, w, cols);
+    sum_sq += residual * residual;
+  });
   stats.rms_gradient_residual = edge_count == 0 ? 0 : std::sqrt(sum_sq / static_cast<double>(edge_count));
   cv::Mat out(rows, cols, CV_64FC1);
   for (int r = 0; r < rows; ++r)
