@@ -10,6 +10,7 @@
 #include "lightstage/pipeline/simulate_folder.hpp"
 #include "lightstage/pipeline/solve_folder.hpp"
 #include "lightstage/testing/errors.hpp"
+#include "lightstage/testing/light_statistics.hpp"
 #include "lightstage/testing/paths.hpp"
 
 #include <fmt/format.h>
@@ -87,6 +88,10 @@ void expect_bands_equal_whole(const fs::path& stack, SolveSettings settings, con
     expect_same_map(io::read_pfm(b / file), io::read_pfm(a / file), file);
   if (fs::exists(a / "albedo_rgb.pfm"))
     expect_same_map(io::read_pfm(b / "albedo_rgb.pfm"), io::read_pfm(a / "albedo_rgb.pfm"), "albedo_rgb.pfm");
+  lightstage::testing::expect_same_light_statistics(whole.summary, banded.summary);
+  // The report shows them without decoding the stack again.
+  EXPECT_NE(lightstage::testing::read_text(b / "report.html").find("<section id=\"light-statistics\">"),
+            std::string::npos);
   EXPECT_TRUE(fs::exists(b / "report.html"));
 }
 

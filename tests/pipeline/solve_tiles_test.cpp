@@ -10,6 +10,7 @@
 #include "lightstage/pipeline/solve_bands.hpp"
 #include "lightstage/pipeline/solve_folder.hpp"
 #include "lightstage/testing/errors.hpp"
+#include "lightstage/testing/light_statistics.hpp"
 #include "lightstage/testing/paths.hpp"
 
 #include <gmock/gmock.h>
@@ -65,6 +66,10 @@ void expect_same_solve(const SolveReport& single, const SolveReport& merged, con
                   io::read_exr(a / "normal.exr", {"R", "G", "B"}), "normals");
   for (const char* file : {"albedo.pfm", "residual.pfm", "confidence.pfm"})
     expect_same_map(io::read_pfm(b / file), io::read_pfm(a / file), file);
+  lightstage::testing::expect_same_light_statistics(single.summary, merged.summary);
+  // The report shows them without decoding the stack again.
+  EXPECT_NE(lightstage::testing::read_text(b / "report.html").find("<section id=\"light-statistics\">"),
+            std::string::npos);
   EXPECT_TRUE(fs::exists(b / "report.html"));
   EXPECT_FALSE(fs::exists(b / "tiles"));  // the parts go once merged
 }

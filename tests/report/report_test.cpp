@@ -1,6 +1,7 @@
 // The report writer: per-light statistics, the viewer's shading and embedded
 // data, and the page built from a small synthetic solve.
 #include "lightstage/host/report/report.hpp"
+#include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/normal_map.hpp"
 #include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/io/solve_output.hpp"
@@ -85,13 +86,6 @@ fs::path solved_result(const fs::path& dir) {
   return dir / "result";
 }
 
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 // The text between `open` and the next `close` after it.
 std::string between(const std::string& text, const std::string& open, const std::string& close) {
   const auto start = text.find(open);
@@ -153,6 +147,70 @@ TEST(LightStatistics, FindsTheDarkAndTheSaturatedFrame) {
             std::string::npos);
 }
 
+TEST(LightStatistics, PartsAddUpToTheWholeAndComeBackFromJson) {
+  const ImageStack stack = sphere_stack();
+  const Observations observations = make_observations(stack);
+  std::vector<std::string> files;
+  for (const Frame& frame : stack.frames) files.push_back(frame.filename);
+  report::LightStatisticsTally whole(files, {0.01, "the solver's"});
+  whole.add(observations);
+  // Two parts (a tile job's, read back from its part.json) count every pixel twice, with the same shares.
+  report::LightStatisticsTally twice = report::LightStatisticsTally::from_json(whole.to_json(), "part.json");
+  twice.add(report::LightStatisticsTally::from_json(whole.to_json(), "part.json"));
+  const nlohmann::json once = whole.summary_json(), doubled = twice.summary_json();
+  EXPECT_EQ(doubled["pixels"].get<std::size_t>(), 2 * observations.pixel_count());
+  EXPECT_EQ(doubled["threshold_source"], "the solver's");
+  EXPECT_EQ(doubled["frames"], once["frames"]);
+  // What the solve recorded reads back as the statistics computed from the stack.
+  const auto recorded = report::recorded_light_statistics(once, stack);
+  ASSERT_TRUE(recorded);
+  const auto computed = report::light_statistics(stack, 0.01);
+  for (std::size_t i = 0; i < computed.size(); ++i)
+    EXPECT_EQ((*recorded)[i].to_json(), computed[i].to_json());
+  // Statistics of other frames are not taken for this stack's.
+  nlohmann::json renamed = once;
+  renamed["frames"][3]["file"] = "other.png";
+  EXPECT_FALSE(report::recorded_light_statistics(renamed, stack));
+  EXPECT_FALSE(report::recorded_light_statistics(nlohmann::json::object(), stack));
+  // Bad parts name their file; parts of other frames do not add.
+  nlohmann::json cut = whole.to_json();
+  cut["sums"].erase(0);
+  EXPECT_NE(testing::error_of([&] {
+              report::LightStatisticsTally::from_json(cut, "tiles/part-1-of-2");
+            }).find("tiles/part-1-of-2"),
+            std::string::npos);
+  report::LightStatisticsTally other({"a.png"}, {0.01, "the default"});
+  EXPECT_NE(testing::error_of([&] { twice.add(other); }).find("different frames"), std::string::npos);
+}
+
+TEST(Report, ShowsThePerLightStatisticsTheSolveRecordedWithoutDecodingTheStack) {
+  const auto dir = testing::scratch_dir();
+  const auto result = solved_result(dir);
+  nlohmann::json summary = nlohmann::json::parse(testing::read_text(result / "summary.json"));
+  const ImageStack stack = sphere_stack();
+  std::vector<std::string> files;
+  for (const Frame& frame : stack.frames) files.push_back(frame.filename);
+  report::LightStatisticsTally tally(files, {0.25, "the solver's"});
+  tally.add(make_observations(stack));
+  summary["light_statistics"] = tally.summary_json();
+  summary["light_statistics"]["frames"][0]["mean_value"] = 0.7654321;  // only the solve knows this one
+  std::ofstream(result / "summary.json") << summary.dump();
+  // The frames now read black: statistics from their pixels would say so.
+  for (const Frame& frame : stack.frames)
+    io::write_png16(dir / "stack" / frame.filename, cv::Mat(kSize, kSize, CV_16UC1, cv::Scalar(0)));
+  std::string html = testing::read_text(report::write_report(result).file);
+  EXPECT_NE(html.find("<section id=\"light-statistics\">"), std::string::npos);
+  EXPECT_NE(html.find("<td>0.7654</td>"), std::string::npos);
+  EXPECT_NE(html.find("value ≤ 0.25, the solver's threshold"), std::string::npos);
+  // --shadow-threshold asks for statistics from the stack's pixels.
+  report::ReportOptions options;
+  options.shadow_threshold = 0.05;
+  const auto again = report::write_report(result, result / "again.html", options);
+  html = testing::read_text(again.file);
+  EXPECT_EQ(html.find("<td>0.7654</td>"), std::string::npos);
+  EXPECT_NE(html.find("8 light(s) look dark"), std::string::npos);
+}
+
 TEST(ViewerData, LambertianShadingIsAlbedoTimesClampedCosine) {
   report::SurfaceModel model;
   model.normals = cv::Mat(1, 3, CV_32FC3, cv::Scalar::all(0));
@@ -189,7 +247,7 @@ TEST(ViewerData, PayloadCarriesTheResultFiles) {
   const auto dir = testing::scratch_dir();
   const auto result = solved_result(dir);
   std::vector<std::string> notes;
-  const nlohmann::json summary = nlohmann::json::parse(read_text(result / "summary.json"));
+  const nlohmann::json summary = nlohmann::json::parse(testing::read_text(result / "summary.json"));
   const auto model = report::load_surface_model(io::read_solve_folder(result), 1 << 20, notes);
   EXPECT_EQ(model.stride, 1);
   EXPECT_EQ(model.kind, report::ShadingKind::kLambertian);
@@ -237,7 +295,7 @@ TEST(Report, HasEverySectionForASolvedSimulatedStack) {
   const std::vector<std::string> expected = {"viewer",   "surface", "lights", "light-statistics",
                                              "residual", "error",   "notes"};
   EXPECT_EQ(summary.sections, expected);
-  const std::string html = read_text(summary.file);
+  const std::string html = testing::read_text(summary.file);
   EXPECT_EQ(html.size(), summary.bytes);
   // Self-contained: images are data URIs, nothing is fetched.
   EXPECT_EQ(html.find("src=\"http"), std::string::npos);

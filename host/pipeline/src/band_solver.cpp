@@ -154,6 +154,12 @@ SolveResult BandSolver::solve_rows(int begin, int end, const ShadowThreshold& th
     if (observations.pixel_count() == 0) return;
     const SolveResult result = solve_planned(observations, *solve_plan, /*refit_relighting=*/false);
     results.add(result, y0 - begin);
+    if (!light_statistics_) {
+      std::vector<std::string> files;
+      for (const Frame& frame : meta_.frames) files.push_back(frame.filename);
+      light_statistics_.emplace(std::move(files), report::statistics_threshold(result.parameters));
+    }
+    light_statistics_->add(observations);
     if (band.ground_truth && !band.ground_truth->normals.empty()) {
       error.add(result.normals, band.ground_truth->normals, observations.mask);
       has_ground_truth = true;
@@ -189,8 +195,7 @@ SolveReport write_band_solve(const std::filesystem::path& input, const std::file
   }
   report.summary = io::write_solve_outputs(out, result, input, extra);
   logger("host")->info("{}", result.summary.message);
-  // Per-light statistics would read the whole stack at once: the report leaves them out (and says so).
-  write_result_report(out, input, /*light_statistics=*/false);
+  write_result_report(out, input, /*light_statistics=*/extra.contains("light_statistics"));
   return report;
 }
 

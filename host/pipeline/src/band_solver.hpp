@@ -6,6 +6,7 @@
 #include "lightstage/host/calibration/apply_calibration.hpp"
 #include "lightstage/host/eval/angular_error.hpp"
 #include "lightstage/host/io/stack_bands.hpp"
+#include "lightstage/host/report/light_statistics.hpp"
 #include "lightstage/host/shadow_threshold.hpp"
 #include "lightstage/host/stack_response.hpp"
 #include "lightstage/pipeline/solve_bands.hpp"
@@ -65,6 +66,9 @@ class BandSolver {
   SolveResult solve_rows(int begin, int end, const ShadowThreshold& threshold, AngularErrorAccumulator& error,
                          bool& has_ground_truth);
 
+  // The per-light statistics of the rows solved so far (nullopt before a band with a mask pixel).
+  const std::optional<report::LightStatisticsTally>& light_statistics() const { return light_statistics_; }
+
   // summary.json's radiometry, lights (known after solve_rows), calibration, bands and crop.
   nlohmann::json describe() const;
   // The region solved (--crop, else the whole image): rows count from its top.
@@ -89,12 +93,13 @@ class BandSolver {
   std::optional<calibration::StackCalibration> applied_;
   cv::Mat background_;
   nlohmann::json light_model_;
+  std::optional<report::LightStatisticsTally> light_statistics_;
 };
 
 // Writes the solve folder of a result made of bands: the maps, summary.json
-// with `extra` and the error, and the report (without per-light statistics,
-// which would read the whole stack at once). Throws InputError, writing
-// nothing, when no pixel was solved.
+// with `extra` and the error, and the report (per-light statistics only from
+// extra's "light_statistics": the report must not read the whole stack at
+// once). Throws InputError, writing nothing, when no pixel was solved.
 SolveReport write_band_solve(const std::filesystem::path& input, const std::filesystem::path& out,
                              const SolveResult& result, nlohmann::json extra,
                              const std::optional<AngularErrorStats>& error);

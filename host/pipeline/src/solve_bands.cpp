@@ -93,7 +93,9 @@ SolveReport solve_folder_in_bands(const std::filesystem::path& input, const Solv
   AngularErrorAccumulator error;
   bool ground_truth = false;
   const SolveResult result = solver.solve_rows(0, solver.size().height, threshold, error, ground_truth);
-  return bands::write_band_solve(input, out, result, solver.describe(),
+  nlohmann::json extra = solver.describe();
+  if (solver.light_statistics()) extra["light_statistics"] = solver.light_statistics()->summary_json();
+  return bands::write_band_solve(input, out, result, extra,
                                  ground_truth ? std::optional(error.stats()) : std::nullopt);
 }
 

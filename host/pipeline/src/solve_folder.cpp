@@ -6,6 +6,7 @@
 #include "lightstage/host/io/output_folder.hpp"
 #include "lightstage/host/io/solve_output.hpp"
 #include "lightstage/host/io/stack_io.hpp"
+#include "lightstage/host/report/light_statistics.hpp"
 #include "lightstage/host/report/report.hpp"
 #include "lightstage/host/stack_response.hpp"
 #include "lightstage/pipeline/memory_budget.hpp"
@@ -83,6 +84,7 @@ SolveInput load_solve_input(const std::filesystem::path& input, const Radiometry
   }
   prepared.shadow = estimate_shadow_threshold(stack, prepared.observations);
   prepared.ground_truth = std::move(stack.ground_truth);
+  for (const Frame& frame : stack.frames) prepared.frame_files.push_back(frame.filename);
   prepared.response = response;
   prepared.light_model =
       set_light_model(input, stack, applied, calibration, prepared.observations, /*warn=*/true);
@@ -108,6 +110,11 @@ SolveReport solve_folder(const std::filesystem::path& input, const RadiometryOpt
       {"lights", prepared.light_model}};
   if (!prepared.calibration.is_null()) extra["calibration"] = prepared.calibration;
   if (!region.empty()) extra["crop"] = {region.x, region.y, region.width, region.height};
+  // Gathered here, from the observations in memory, so that the report need not decode the stack again.
+  report::LightStatisticsTally light_statistics(prepared.frame_files,
+                                                report::statistics_threshold(result.parameters));
+  light_statistics.add(prepared.observations);
+  extra["light_statistics"] = light_statistics.summary_json();
   if (prepared.ground_truth && !prepared.ground_truth->normals.empty()) {
     report.error =
         angular_error(result.normals, prepared.ground_truth->normals, prepared.observations.mask).stats;

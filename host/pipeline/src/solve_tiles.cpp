@@ -276,6 +276,7 @@ SolveReport solve_one_tile(const fs::path& input, const SolveSettings& settings,
       {"shadow_threshold", threshold.to_json()},
       {"ground_truth", ground_truth},
       {"describe", solver.describe()}};
+  if (solver.light_statistics()) info["light_statistics"] = solver.light_statistics()->to_json();
   const fs::path folder = part_folder(out, job);
   write_part(folder, result, info);
   logger("host")->info("tile {}/{} (rows {}-{}): {}", job.index, job.count, first, end - 1,
@@ -323,6 +324,7 @@ SolveReport merge_tiles(const fs::path& input, const SolveSettings& settings, co
   const std::vector<fs::path> parts = find_parts(out);
   const json key = run_key(input, settings, calibration);
   std::optional<bands::BandResults> results;
+  std::optional<report::LightStatisticsTally> light_statistics;
   json first;
   bool ground_truth = false;
   for (const fs::path& part : parts) {
@@ -343,6 +345,13 @@ SolveReport merge_tiles(const fs::path& input, const SolveSettings& settings, co
       fail("{}: an image of another size than {}", part.string(), parts.front().string());
     }
     const SolveResult result = read_part(part, j);
+    if (const auto it = j.find("light_statistics"); it != j.end()) {
+      const auto tally = report::LightStatisticsTally::from_json(*it, (part / "part.json").string());
+      if (light_statistics)
+        light_statistics->add(tally);
+      else
+        light_statistics = tally;
+    }
     // A tile without a mask pixel holds zeros only, and no method facts.
     if (result.summary.pixels_in_mask > 0) results->add(result, j.at("tile").at("first_row").get<int>());
     ground_truth = ground_truth || j.value("ground_truth", false);
@@ -350,6 +359,7 @@ SolveReport merge_tiles(const fs::path& input, const SolveSettings& settings, co
   const SolveResult result = results->finish();
   json extra = first.at("describe");
   extra["bands"]["tiles"] = parts.size();
+  if (light_statistics) extra["light_statistics"] = light_statistics->summary_json();
   std::optional<AngularErrorStats> error;
   if (ground_truth) {  // the jobs saw it; read again here, without the frames
     io::LoadOptions options;

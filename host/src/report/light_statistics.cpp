@@ -3,8 +3,35 @@
 #include "lightstage/common/error.hpp"
 
 #include <cmath>
+#include <utility>
 
 namespace lightstage::report {
+namespace {
+
+constexpr double kDefaultShadowThreshold = 0.02;
+
+std::vector<std::string> frame_files(const ImageStack& stack) {
+  std::vector<std::string> files;
+  for (const Frame& frame : stack.frames) files.push_back(frame.filename);
+  return files;
+}
+
+LightStatistics frame_statistics(const Frame& frame) {
+  LightStatistics s;
+  s.file = frame.filename;
+  s.led_id = frame.led_id;
+  s.direction = frame.light_direction;
+  s.exposure_us = frame.exposure_us;
+  s.gain = frame.gain;
+  return s;
+}
+
+void check_threshold(double shadow_threshold) {
+  if (!(shadow_threshold >= 0) || !std::isfinite(shadow_threshold))
+    fail("light statistics: shadow_threshold must be a number ≥ 0, got {}", shadow_threshold);
+}
+
+}  // namespace
 
 nlohmann::json LightStatistics::to_json() const {
   return {{"file", file},
@@ -24,35 +51,123 @@ std::vector<LightStatistics> light_statistics(const ImageStack& stack, double sh
 
 std::vector<LightStatistics> light_statistics(const ImageStack& stack, const Observations& observations,
                                               double shadow_threshold) {
-  if (!(shadow_threshold >= 0) || !std::isfinite(shadow_threshold))
-    fail("light statistics: shadow_threshold must be a number ≥ 0, got {}", shadow_threshold);
-  if (observations.image_count() != stack.frames.size())
-    fail("light statistics: {} observation columns for {} frames", observations.image_count(),
-         stack.frames.size());
+  check_threshold(shadow_threshold);
+  LightStatisticsTally tally(frame_files(stack), {shadow_threshold, ""});
+  tally.add(observations);
+  return *recorded_light_statistics(tally.summary_json(), stack);
+}
+
+StatisticsThreshold statistics_threshold(const nlohmann::json& solve_parameters, std::optional<double> flag) {
+  if (flag) return {*flag, "--shadow-threshold"};
+  if (solve_parameters.is_object()) {
+    const auto it = solve_parameters.find("shadow_threshold");
+    if (it != solve_parameters.end() && it->is_number() && it->get<double>() > 0)
+      return {it->get<double>(), "the solver's"};
+  }
+  return {kDefaultShadowThreshold, "the default"};
+}
+
+LightStatisticsTally::LightStatisticsTally(std::vector<std::string> files, StatisticsThreshold threshold)
+    : files_(std::move(files)),
+      threshold_(std::move(threshold)),
+      sums_(files_.size(), 0.0),
+      saturated_(files_.size(), 0),
+      shadow_(files_.size(), 0) {
+  check_threshold(threshold_.value);
+}
+
+void LightStatisticsTally::add(const Observations& observations) {
+  if (observations.image_count() != files_.size())
+    fail("light statistics: {} observation columns for {} frames", observations.image_count(), files_.size());
   const auto pixels = static_cast<Eigen::Index>(observations.pixel_count());
+  for (std::size_t i = 0; i < files_.size(); ++i) {
+    const auto column = static_cast<Eigen::Index>(i);
+    double sum = 0;
+    std::size_t saturated = 0, dark = 0;
+    for (Eigen::Index p = 0; p < pixels; ++p) {
+      const float v = observations.intensities(p, column);
+      sum += v;
+      saturated += observations.saturated(p, column) ? 1 : 0;
+      dark += static_cast<double>(v) <= threshold_.value ? 1 : 0;
+    }
+    sums_[i] += sum;
+    saturated_[i] += saturated;
+    shadow_[i] += dark;
+  }
+  pixels_ += observations.pixel_count();
+}
+
+void LightStatisticsTally::add(const LightStatisticsTally& other) {
+  if (other.files_ != files_)
+    fail("light statistics: parts of different frames ({} and {} files)", files_.size(), other.files_.size());
+  for (std::size_t i = 0; i < files_.size(); ++i) {
+    sums_[i] += other.sums_[i];
+    saturated_[i] += other.saturated_[i];
+    shadow_[i] += other.shadow_[i];
+  }
+  pixels_ += other.pixels_;
+}
+
+nlohmann::json LightStatisticsTally::summary_json() const {
+  nlohmann::json frames = nlohmann::json::array();
+  const auto n = static_cast<double>(pixels_);
+  for (std::size_t i = 0; i < files_.size(); ++i) {
+    frames.push_back({{"file", files_[i]},
+                      {"mean_value", pixels_ > 0 ? sums_[i] / n : 0.0},
+                      {"saturated_share", pixels_ > 0 ? static_cast<double>(saturated_[i]) / n : 0.0},
+                      {"shadow_share", pixels_ > 0 ? static_cast<double>(shadow_[i]) / n : 0.0}});
+  }
+  return {{"shadow_threshold", threshold_.value},
+          {"threshold_source", threshold_.source},
+          {"pixels", pixels_},
+          {"frames", frames}};
+}
+
+nlohmann::json LightStatisticsTally::to_json() const {
+  return {{"files", files_},
+          {"shadow_threshold", threshold_.value},
+          {"threshold_source", threshold_.source},
+          {"pixels", pixels_},
+          {"sums", sums_},
+          {"saturated", saturated_},
+          {"shadow", shadow_}};
+}
+
+LightStatisticsTally LightStatisticsTally::from_json(const nlohmann::json& j, const std::string& what) {
+  try {
+    LightStatisticsTally tally(
+        j.at("files").get<std::vector<std::string>>(),
+        {j.at("shadow_threshold").get<double>(), j.at("threshold_source").get<std::string>()});
+    tally.pixels_ = j.at("pixels").get<std::size_t>();
+    tally.sums_ = j.at("sums").get<std::vector<double>>();
+    tally.saturated_ = j.at("saturated").get<std::vector<std::size_t>>();
+    tally.shadow_ = j.at("shadow").get<std::vector<std::size_t>>();
+    const std::size_t n = tally.files_.size();
+    if (tally.sums_.size() != n || tally.saturated_.size() != n || tally.shadow_.size() != n)
+      fail("{}: light statistics: sums and counts for {} files expected", what, n);
+    return tally;
+  } catch (const nlohmann::json::exception& e) {
+    fail("{}: light statistics: {}", what, e.what());
+  }
+}
+
+std::optional<std::vector<LightStatistics>> recorded_light_statistics(const nlohmann::json& recorded,
+                                                                      const ImageStack& stack) {
+  if (!recorded.is_object()) return std::nullopt;
+  const auto frames = recorded.find("frames");
+  if (frames == recorded.end() || !frames->is_array() || frames->size() != stack.frames.size())
+    return std::nullopt;
   std::vector<LightStatistics> out;
   for (std::size_t i = 0; i < stack.frames.size(); ++i) {
-    const Frame& frame = stack.frames[i];
-    const auto column = static_cast<Eigen::Index>(i);
-    LightStatistics s;
-    s.file = frame.filename;
-    s.led_id = frame.led_id;
-    s.direction = frame.light_direction;
-    s.exposure_us = frame.exposure_us;
-    s.gain = frame.gain;
-    if (pixels > 0) {
-      double sum = 0;
-      Eigen::Index saturated = 0, shadow = 0;
-      for (Eigen::Index p = 0; p < pixels; ++p) {
-        const float v = observations.intensities(p, column);
-        sum += v;
-        if (observations.saturated(p, column)) ++saturated;
-        if (v <= shadow_threshold) ++shadow;
-      }
-      const auto n = static_cast<double>(pixels);
-      s.mean_value = sum / n;
-      s.saturated_share = static_cast<double>(saturated) / n;
-      s.shadow_share = static_cast<double>(shadow) / n;
+    const nlohmann::json& f = (*frames)[i];
+    if (!f.is_object() || f.value("file", std::string()) != stack.frames[i].filename) return std::nullopt;
+    LightStatistics s = frame_statistics(stack.frames[i]);
+    for (auto [key, value] :
+         {std::pair{"mean_value", &s.mean_value}, std::pair{"saturated_share", &s.saturated_share},
+          std::pair{"shadow_share", &s.shadow_share}}) {
+      const auto it = f.find(key);
+      if (it == f.end() || !it->is_number()) return std::nullopt;
+      *value = it->get<double>();
     }
     out.push_back(s);
   }

@@ -34,8 +34,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kDefaultShadowThreshold = 0.02;
-
 nlohmann::json read_json_file(const fs::path& path) {
   std::ifstream in(path);
   if (!in) fail("{}: cannot open", path.string());
@@ -155,7 +153,9 @@ void load_inputs(Inputs& in, const io::SolveFolder& folder, const ReportOptions&
   if (in.stack_dir) {
     io::LoadOptions load;
     load.min_images = 1;
-    load.frame_pixels = options.light_statistics;  // only the statistics need the frames' pixels
+    // Only statistics the solve did not record need the frames' pixels.
+    load.frame_pixels = options.light_statistics &&
+                        (options.shadow_threshold.has_value() || !in.summary.contains("light_statistics"));
     try {
       in.stack = io::load_stack(*in.stack_dir, load);
       if (const auto crop = in.summary.find("crop"); crop != in.summary.end()) cut_to_crop(*in.stack, *crop);
@@ -393,27 +393,33 @@ std::string lights_section(const Inputs& in) {
 
 std::string light_statistics_section(const Inputs& in, const ReportOptions& options,
                                      std::vector<std::string>& notes) {
-  double threshold = kDefaultShadowThreshold;
-  std::string threshold_source = "the default";
-  if (options.shadow_threshold) {
-    threshold = *options.shadow_threshold;
-    threshold_source = "--shadow-threshold";
-  } else if (const auto it = in.summary.find("parameters"); it != in.summary.end() && it->is_object()) {
-    const double solver = it->value("shadow_threshold", 0.0);
-    if (solver > 0) {
-      threshold = solver;
-      threshold_source = "the solver's";
-    }
-  }
-  RadiometryOptions radiometry;
-  if (const auto it = in.summary.find("radiometry"); it != in.summary.end() && it->is_object())
-    radiometry.clamp_to_one = it->value("clamp_to_one", true);
+  const auto parameters = in.summary.find("parameters");
+  StatisticsThreshold threshold = statistics_threshold(
+      parameters == in.summary.end() ? nlohmann::json() : *parameters, options.shadow_threshold);
   std::vector<LightStatistics> stats;
-  try {
-    stats = light_statistics(*in.stack, threshold, radiometry);
-  } catch (const InputError& e) {
-    notes.push_back(fmt::format("Per-light statistics could not be computed: {}", e.what()));
-    return {};
+  if (const auto recorded = in.summary.find("light_statistics");
+      recorded != in.summary.end() && !options.shadow_threshold) {
+    // Gathered by the solve from the observations it made (its radiometry, response and calibration).
+    const auto from_solve = recorded_light_statistics(*recorded, *in.stack);
+    if (!from_solve) {
+      notes.push_back(
+          "Per-light statistics in summary.json were made of other frames than the stack's: not shown (run "
+          "`lightstage report --shadow-threshold T` to compute them from the stack).");
+      return {};
+    }
+    stats = *from_solve;
+    threshold = {recorded->value("shadow_threshold", threshold.value),
+                 recorded->value("threshold_source", threshold.source)};
+  } else {
+    RadiometryOptions radiometry;
+    if (const auto it = in.summary.find("radiometry"); it != in.summary.end() && it->is_object())
+      radiometry.clamp_to_one = it->value("clamp_to_one", true);
+    try {
+      stats = light_statistics(*in.stack, threshold.value, radiometry);
+    } catch (const InputError& e) {
+      notes.push_back(fmt::format("Per-light statistics could not be computed: {}", e.what()));
+      return {};
+    }
   }
   std::vector<double> means, saturated, shadow;
   for (const auto& s : stats) {
@@ -433,7 +439,7 @@ std::string light_statistics_section(const Inputs& in, const ReportOptions& opti
       "<p>{} lights. Over the mask: mean value (linear, divided by the light's intensity), the share of "
       "pixels "
       "with a saturated channel, and the share in shadow (value ≤ {}, {} threshold).</p>\n",
-      stats.size(), format_number(threshold), threshold_source);
+      stats.size(), format_number(threshold.value), threshold.source);
   html += fmt::format(
       "<p><b>{}</b> · <b>{}</b></p>\n",
       dark == 0 ? std::string("every light lit the object")

@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 namespace lightstage::testing {
@@ -59,5 +61,10 @@ std::filesystem::path socket_dir() {
 }
 
 std::filesystem::path bin_dir() { return std::filesystem::path(LIGHTSTAGE_TEST_BINARY_DIR) / "bin"; }
+
+std::string read_text(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
 
 }  // namespace lightstage::testing

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,5 +35,48 @@ std::vector<LightStatistics> light_statistics(const ImageStack& stack, double sh
 // The same from observations already made (their frames' metadata from `stack`).
 std::vector<LightStatistics> light_statistics(const ImageStack& stack, const Observations& observations,
                                               double shadow_threshold);
+
+// The shadow threshold the statistics use: `flag` when given, else the
+// solver's (a solve's parameters.shadow_threshold when > 0), else 0.02.
+struct StatisticsThreshold {
+  double value = 0;
+  std::string source;  // "--shadow-threshold", "the solver's" or "the default"
+};
+StatisticsThreshold statistics_threshold(const nlohmann::json& solve_parameters,
+                                         std::optional<double> flag = std::nullopt);
+
+// The statistics gathered where the observations are made: by the solve, a
+// band (or a tile) at a time, so that the report never decodes the stack
+// again. Sums and counts add exactly; `summary_json` is what summary.json
+// records under "light_statistics" and the report reads back.
+class LightStatisticsTally {
+ public:
+  LightStatisticsTally(std::vector<std::string> files, StatisticsThreshold threshold);
+
+  // Observations of some of the mask's pixels, one column per file.
+  void add(const Observations& observations);
+  // Another part of the same stack's pixels (a tile job's).
+  void add(const LightStatisticsTally& other);
+
+  // {"shadow_threshold", "threshold_source", "pixels", "frames": [{"file", "mean_value",
+  // "saturated_share", "shadow_share"}]}
+  nlohmann::json summary_json() const;
+  // Sums and counts, exactly; `from_json` reads them back (InputError naming `what`).
+  nlohmann::json to_json() const;
+  static LightStatisticsTally from_json(const nlohmann::json& j, const std::string& what);
+
+ private:
+  std::vector<std::string> files_;
+  StatisticsThreshold threshold_;
+  std::size_t pixels_ = 0;
+  std::vector<double> sums_;
+  std::vector<std::size_t> saturated_, shadow_;
+};
+
+// Statistics a solve recorded (LightStatisticsTally::summary_json) for the
+// frames of `stack`, its metadata (LED, direction, exposure) from `stack`.
+// nullopt when they are absent or were made of other frames.
+std::optional<std::vector<LightStatistics>> recorded_light_statistics(const nlohmann::json& recorded,
+                                                                      const ImageStack& stack);
 
 }  // namespace lightstage::report

@@ -16,6 +16,8 @@
 #include <filesystem>
 #include <functional>
 #include <optional>
+#include <string>
+#include <vector>
 
 namespace lightstage::pipeline {
 
@@ -44,6 +46,7 @@ struct SolveInput {
   nlohmann::json calibration = nullptr;  // describe() of the applied calibration, with near_lights
   nlohmann::json response = nullptr;     // the camera response applied (stack_response.hpp)
   nlohmann::json light_model = nullptr;  // {"model": "near"|"distant", "source": why}
+  std::vector<std::string> frame_files;  // the frames' images, one per observation column
 };
 // `region` (non-empty): only that part of the images is read (--crop), the
 // observations placed in the whole image (Observations::origin).

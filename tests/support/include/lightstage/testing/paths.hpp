@@ -2,6 +2,7 @@
 // Where tests find the source tree, the shared real data and scratch space.
 
 #include <filesystem>
+#include <string>
 
 namespace lightstage::testing {
 
@@ -17,5 +18,8 @@ std::filesystem::path socket_dir();
 
 // The build directory's bin/ (the programs under test).
 std::filesystem::path bin_dir();
+
+// A file's bytes ("" when it cannot be read: the test's own expectation then fails).
+std::string read_text(const std::filesystem::path& file);
 
 }  // namespace lightstage::testing
