@@ -151,22 +151,35 @@ LightStatisticsTally LightStatisticsTally::from_json(const nlohmann::json& j, co
   }
 }
 
+std::optional<StatisticsThreshold> recorded_threshold(const nlohmann::json& recorded) {
+  if (!recorded.is_object()) return std::nullopt;
+  const auto value = recorded.find("shadow_threshold");
+  const auto source = recorded.find("threshold_source");
+  if (value == recorded.end() || !value->is_number() || !(value->get<double>() >= 0) ||
+      !std::isfinite(value->get<double>()) || source == recorded.end() || !source->is_string())
+    return std::nullopt;
+  return StatisticsThreshold{value->get<double>(), source->get<std::string>()};
+}
+
 std::optional<std::vector<LightStatistics>> recorded_light_statistics(const nlohmann::json& recorded,
                                                                       const ImageStack& stack) {
-  if (!recorded.is_object()) return std::nullopt;
+  if (!recorded_threshold(recorded)) return std::nullopt;
   const auto frames = recorded.find("frames");
   if (frames == recorded.end() || !frames->is_array() || frames->size() != stack.frames.size())
     return std::nullopt;
   std::vector<LightStatistics> out;
   for (std::size_t i = 0; i < stack.frames.size(); ++i) {
     const nlohmann::json& f = (*frames)[i];
-    if (!f.is_object() || f.value("file", std::string()) != stack.frames[i].filename) return std::nullopt;
+    if (!f.is_object()) return std::nullopt;
+    const auto file = f.find("file");
+    if (file == f.end() || !file->is_string() || file->get<std::string>() != stack.frames[i].filename)
+      return std::nullopt;
     LightStatistics s = frame_statistics(stack.frames[i]);
     for (auto [key, value] :
          {std::pair{"mean_value", &s.mean_value}, std::pair{"saturated_share", &s.saturated_share},
           std::pair{"shadow_share", &s.shadow_share}}) {
       const auto it = f.find(key);
-      if (it == f.end() || !it->is_number()) return std::nullopt;
+      if (it == f.end() || !it->is_number() || !std::isfinite(it->get<double>())) return std::nullopt;
       *value = it->get<double>();
     }
     out.push_back(s);

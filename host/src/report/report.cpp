@@ -403,13 +403,13 @@ std::string light_statistics_section(const Inputs& in, const ReportOptions& opti
     const auto from_solve = recorded_light_statistics(*recorded, *in.stack);
     if (!from_solve) {
       notes.push_back(
-          "Per-light statistics in summary.json were made of other frames than the stack's: not shown (run "
+          "Per-light statistics in summary.json are malformed or were made of other frames than the stack's: "
+          "not shown (run "
           "`lightstage report --shadow-threshold T` to compute them from the stack).");
       return {};
     }
     stats = *from_solve;
-    threshold = {recorded->value("shadow_threshold", threshold.value),
-                 recorded->value("threshold_source", threshold.source)};
+    threshold = *recorded_threshold(*recorded);
   } else {
     RadiometryOptions radiometry;
     if (const auto it = in.summary.find("radiometry"); it != in.summary.end() && it->is_object())

@@ -73,9 +73,13 @@ class LightStatisticsTally {
   std::vector<std::size_t> saturated_, shadow_;
 };
 
+// The threshold statistics a solve recorded were made with; nullopt when
+// absent or malformed.
+std::optional<StatisticsThreshold> recorded_threshold(const nlohmann::json& recorded);
+
 // Statistics a solve recorded (LightStatisticsTally::summary_json) for the
 // frames of `stack`, its metadata (LED, direction, exposure) from `stack`.
-// nullopt when they are absent or were made of other frames.
+// nullopt when they are absent, malformed or were made of other frames.
 std::optional<std::vector<LightStatistics>> recorded_light_statistics(const nlohmann::json& recorded,
                                                                       const ImageStack& stack);
 
