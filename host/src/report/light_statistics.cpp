@@ -79,20 +79,23 @@ LightStatisticsTally::LightStatisticsTally(std::vector<std::string> files, Stati
 void LightStatisticsTally::add(const Observations& observations) {
   if (observations.image_count() != files_.size())
     fail("light statistics: {} observation columns for {} frames", observations.image_count(), files_.size());
-  const auto pixels = static_cast<Eigen::Index>(observations.pixel_count());
-  for (std::size_t i = 0; i < files_.size(); ++i) {
-    const auto column = static_cast<Eigen::Index>(i);
-    double sum = 0;
-    std::size_t saturated = 0, dark = 0;
-    for (Eigen::Index p = 0; p < pixels; ++p) {
-      const float v = observations.intensities(p, column);
-      sum += v;
-      saturated += observations.saturated(p, column) ? 1 : 0;
-      dark += static_cast<double>(v) <= threshold_.value ? 1 : 0;
+  // Pixel by pixel along the (row-major) matrices; each frame's sum still runs over the pixels in order.
+  const std::size_t frames = files_.size();
+  std::vector<double> sums(frames, 0.0);
+  std::vector<std::size_t> saturated(frames, 0), dark(frames, 0);
+  for (Eigen::Index p = 0; p < static_cast<Eigen::Index>(observations.pixel_count()); ++p) {
+    const float* values = observations.intensities.row(p).data();
+    const bool* clipped = observations.saturated.row(p).data();
+    for (std::size_t i = 0; i < frames; ++i) {
+      sums[i] += values[i];
+      saturated[i] += clipped[i] ? 1 : 0;
+      dark[i] += static_cast<double>(values[i]) <= threshold_.value ? 1 : 0;
     }
-    sums_[i] += sum;
-    saturated_[i] += saturated;
-    shadow_[i] += dark;
+  }
+  for (std::size_t i = 0; i < frames; ++i) {
+    sums_[i] += sums[i];
+    saturated_[i] += saturated[i];
+    shadow_[i] += dark[i];
   }
   pixels_ += observations.pixel_count();
 }
