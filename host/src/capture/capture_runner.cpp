@@ -21,7 +21,7 @@
 namespace lightstage {
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using SteadyClock = std::chrono::steady_clock;
 
 std::string led_name(int id) { return id < 0 ? std::string("dark") : fmt::format("LED {}", id); }
 
@@ -170,18 +170,18 @@ Batch CaptureRunner::run_batch_once(const std::vector<Shot>& shots) {
     // A camera may deliver well after the sequence (slow readout, a busy
     // link): while frames keep coming it is late, not dropping them, so the
     // wait counts from the later of the sequence's end and the last frame.
-    Clock::time_point quiet_since{};
+    SteadyClock::time_point quiet_since{};
     try {
       for (;;) {
         if (auto frame = cam_.wait_frame(std::chrono::milliseconds(20))) {
           const std::lock_guard lock(frames_mutex);
           frames.push_back(std::move(*frame));
-          if (sequence_done) quiet_since = Clock::now();
+          if (sequence_done) quiet_since = SteadyClock::now();
         }
         if (!sequence_done) continue;
-        if (quiet_since == Clock::time_point{}) quiet_since = Clock::now();
+        if (quiet_since == SteadyClock::time_point{}) quiet_since = SteadyClock::now();
         const std::lock_guard lock(frames_mutex);
-        if (frames.size() >= shots.size() || Clock::now() - quiet_since > wait_limit) return;
+        if (frames.size() >= shots.size() || SteadyClock::now() - quiet_since > wait_limit) return;
       }
     } catch (...) {
       camera_error = std::current_exception();
@@ -196,7 +196,7 @@ Batch CaptureRunner::run_batch_once(const std::vector<Shot>& shots) {
     throw;
   }
   sequence_done = true;
-  const Clock::time_point controller_done = Clock::now();
+  const SteadyClock::time_point controller_done = SteadyClock::now();
   reader.join();
   Batch batch;
   batch.camera_wait_seconds = seconds_since(controller_done);
@@ -285,7 +285,7 @@ Batch CaptureRunner::run_software_batch(const std::vector<Shot>& shots) {
     std::vector<std::pair<std::uint32_t, float>> leds;
     if (shots[i].led_id >= 0) leds.emplace_back(static_cast<std::uint32_t>(shots[i].led_id), 1.0f);
     controller_.set_leds(leds);
-    const Clock::time_point asked = Clock::now();
+    const SteadyClock::time_point asked = SteadyClock::now();
     std::optional<camera::Frame> frame;
     try {
       cam_.trigger();

@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 namespace lightstage {
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using SteadyClock = std::chrono::steady_clock;
 
 // The camera is stopped however the capture ends.
 struct StopCamera {
@@ -37,7 +37,7 @@ struct StopCamera {
 CaptureReport run_capture(const Rig& rig, ControllerClient& controller, camera::Camera& cam,
                           const CaptureOptions& options, CaptureRunner& runner,
                           const InverseResponse* response) {
-  const Clock::time_point started = Clock::now();
+  const SteadyClock::time_point started = SteadyClock::now();
   const std::vector<int> led_ids = plan_led_ids(rig, options.led_ids);
   if (!options.resume)
     io::require_empty_folder(options.out, "--out",

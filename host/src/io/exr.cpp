@@ -1,7 +1,7 @@
 #include "lightstage/host/io/exr.hpp"
 
 #include "lightstage/common/error.hpp"
-#include "util/atomic_file.hpp"
+#include "lightstage/host/io/row_writer.hpp"
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfCompression.h>
@@ -48,27 +48,6 @@ struct ExrFile::Bytes : Imf::IStream {
 };
 
 namespace {
-
-// An OpenEXR output stream into memory; the file is written in one go after.
-class StringOStream : public Imf::OStream {
- public:
-  explicit StringOStream(const std::string& name) : Imf::OStream(name.c_str()) {}
-
-  void write(const char c[], int n) override {
-    const auto count = static_cast<std::size_t>(n);
-    if (data_.size() < at_ + count) data_.resize(at_ + count);
-    std::memcpy(data_.data() + at_, c, count);
-    at_ += count;
-  }
-  std::uint64_t tellp() override { return at_; }
-  void seekp(std::uint64_t pos) override { at_ = static_cast<std::size_t>(pos); }
-
-  const std::string& data() const { return data_; }
-
- private:
-  std::string data_;
-  std::size_t at_ = 0;
-};
 
 ExrPixelType pixel_type(Imf::PixelType type) {
   switch (type) {
@@ -214,36 +193,12 @@ cv::Mat read_exr(const std::filesystem::path& path, const std::vector<std::strin
 
 void write_exr(const std::filesystem::path& path, const cv::Mat& image,
                const std::vector<std::string>& channels) {
-  const std::string file = path.string();
   if (image.empty() || image.depth() != CV_32F || (image.channels() != 1 && image.channels() != 3))
-    fail("{}: cannot write as EXR: expected CV_32FC1 or CV_32FC3, got depth code {} with {} channel(s)", file,
-         image.depth(), image.channels());
-  const auto n = static_cast<std::size_t>(image.channels());
-  if (channels.size() != n)
-    fail("{}: cannot write as EXR: {} channel name(s) for {} channel(s)", file, channels.size(), n);
-  std::set<std::string> seen;
-  for (const auto& name : channels) {
-    if (name.empty() || name.size() > 255)
-      fail("{}: cannot write as EXR: channel name '{}' (1 to 255 bytes)", file, name);
-    if (!seen.insert(name).second) fail("{}: cannot write as EXR: channel name '{}' repeated", file, name);
-  }
-  StringOStream out(file);
-  try {
-    Imf::Header header(image.cols, image.rows);
-    header.compression() = Imf::ZIP_COMPRESSION;
-    for (const auto& name : channels) header.channels().insert(name, Imf::Channel(Imf::FLOAT));
-    Imf::OutputFile exr(out, header);
-    Imf::FrameBuffer frame;
-    for (std::size_t i = 0; i < n; ++i)
-      frame.insert(channels[i],
-                   Imf::Slice(Imf::FLOAT, const_cast<char*>(image.ptr<char>()) + i * sizeof(float),
-                              n * sizeof(float), image.step[0]));
-    exr.setFrameBuffer(frame);
-    exr.writePixels(image.rows);
-  } catch (const std::exception& e) {
-    fail("{}: cannot write as EXR: {}", file, e.what());
-  }
-  util::write_text_atomic(path, out.data());
+    fail("{}: cannot write as EXR: expected CV_32FC1 or CV_32FC3, got depth code {} with {} channel(s)",
+         path.string(), image.depth(), image.channels());
+  const auto writer = open_exr_writer(path, image.size(), image.type(), channels);
+  writer->write(image);
+  writer->commit();
 }
 
 }  // namespace lightstage::io

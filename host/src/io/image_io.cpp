@@ -4,8 +4,8 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/io/raw_image.hpp"
+#include "lightstage/host/io/row_writer.hpp"
 #include "lightstage/host/io/tiff_image.hpp"
-#include "util/atomic_file.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -71,16 +71,9 @@ void write_png(const std::filesystem::path& path, const cv::Mat& image) {
     fail("{}: cannot write as PNG: {}; expected 8- or 16-bit with 1 or 3 channels", path.string(),
          describe_type(image));
   }
-  // Encoded in memory, so the bytes reach the disk through the one writer that reports errno (a full disk).
-  std::vector<std::uint8_t> png;
-  bool encoded = false;
-  try {
-    encoded = cv::imencode(".png", image, png);
-  } catch (const cv::Exception&) {
-    encoded = false;
-  }
-  if (!encoded) fail("{}: cannot encode as PNG", path.string());
-  util::write_text_atomic(path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
+  const auto writer = open_png_writer(path, image.size(), image.type());
+  writer->write(image);
+  writer->commit();
 }
 
 void write_png16(const std::filesystem::path& path, const cv::Mat& image) {

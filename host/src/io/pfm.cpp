@@ -1,8 +1,10 @@
 #include "lightstage/host/io/pfm.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/host/io/row_writer.hpp"
 #include "util/atomic_file.hpp"
 
+#include <fmt/format.h>
 #include <opencv2/core.hpp>
 
 #include <bit>
@@ -13,6 +15,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -112,31 +115,62 @@ cv::Mat read_pfm(const std::filesystem::path& path) {
   return image;
 }
 
+namespace {
+
+// PFM stores rows bottom to top: each band goes where its rows belong.
+class PfmRowWriter final : public RowWriter {
+ public:
+  PfmRowWriter(const std::filesystem::path& path, cv::Size size, int type)
+      : RowWriter(path, size, type), file_(path), channels_(CV_MAT_CN(type)) {
+    const std::string header =
+        fmt::format("{}\n{} {}\n-1\n", channels_ == 3 ? "PF" : "Pf", size.width, size.height);
+    header_ = header.size();
+    file_.append(header);
+  }
+
+ private:
+  void write_rows(const cv::Mat& rows, int y0) override {
+    const auto values = static_cast<std::size_t>(size().width) * static_cast<std::size_t>(channels_);
+    std::vector<float> out(values * static_cast<std::size_t>(rows.rows));
+    // File rows (bottom up) height-1-(y0+rows-1) .. height-1-y0: one contiguous run, last band row first.
+    for (int r = 0; r < rows.rows; ++r) {
+      const float* in = rows.ptr<float>(rows.rows - 1 - r);
+      float* row = out.data() + static_cast<std::size_t>(r) * values;
+      for (int x = 0; x < size().width; ++x)
+        for (int c = 0; c < channels_; ++c)
+          row[x * channels_ + c] = in[x * channels_ + (channels_ == 3 ? 2 - c : 0)];
+    }
+    if constexpr (std::endian::native != std::endian::little) {
+      for (float& v : out) v = std::bit_cast<float>(byte_swap(std::bit_cast<std::uint32_t>(v)));
+    }
+    const auto first_file_row = static_cast<std::uint64_t>(size().height - (y0 + rows.rows));
+    file_.write_at(header_ + first_file_row * values * sizeof(float),
+                   std::string_view(reinterpret_cast<const char*>(out.data()), out.size() * sizeof(float)));
+  }
+  void finish() override { file_.commit(); }
+
+  util::TemporaryFile file_;
+  int channels_;
+  std::uint64_t header_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<RowWriter> open_pfm_writer(const std::filesystem::path& path, cv::Size size, int type) {
+  if (type != CV_32FC1 && type != CV_32FC3)
+    fail("{}: cannot write as PFM: expected CV_32FC1 or CV_32FC3, got {}", path.string(),
+         cv::typeToString(type));
+  return std::make_unique<PfmRowWriter>(path, size, type);
+}
+
 void write_pfm(const std::filesystem::path& path, const cv::Mat& image) {
   if (image.empty() || image.depth() != CV_32F || (image.channels() != 1 && image.channels() != 3)) {
     fail("{}: cannot write as PFM: expected CV_32FC1 or CV_32FC3, got depth code {} with {} channel(s)",
          path.string(), image.depth(), image.channels());
   }
-  const int channels = image.channels();
-  std::string data = fmt::format("{}\n{} {}\n-1\n", channels == 3 ? "PF" : "Pf", image.cols, image.rows);
-  const std::size_t header = data.size();
-  const std::size_t row_values = static_cast<std::size_t>(image.cols) * static_cast<std::size_t>(channels);
-  data.resize(header + row_values * static_cast<std::size_t>(image.rows) * sizeof(float));
-  std::vector<float> row(row_values);
-  for (int file_row = 0; file_row < image.rows; ++file_row) {
-    const auto* in = image.ptr<float>(image.rows - 1 - file_row);
-    for (int x = 0; x < image.cols; ++x) {
-      for (int c = 0; c < channels; ++c) {
-        row[static_cast<std::size_t>(x * channels + c)] = in[x * channels + (channels == 3 ? 2 - c : 0)];
-      }
-    }
-    if constexpr (std::endian::native != std::endian::little) {
-      for (auto& v : row) v = std::bit_cast<float>(byte_swap(std::bit_cast<std::uint32_t>(v)));
-    }
-    std::memcpy(data.data() + header + static_cast<std::size_t>(file_row) * row_values * sizeof(float),
-                row.data(), row_values * sizeof(float));
-  }
-  util::write_text_atomic(path, data);
+  const auto writer = open_pfm_writer(path, image.size(), image.type());
+  writer->write(image);
+  writer->commit();
 }
 
 }  // namespace lightstage::io

@@ -6,10 +6,12 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <mutex>
 #include <system_error>
+#include <utility>
 
 namespace lightstage::util {
 namespace {
@@ -70,6 +72,60 @@ std::filesystem::path write_temporary(const std::filesystem::path& target, std::
 
 void write_text_atomic(const std::filesystem::path& path, std::string_view text) {
   commit_temporary(write_temporary(path, text), path);
+}
+
+TemporaryFile::TemporaryFile(std::filesystem::path target)
+    : target_(std::move(target)), temporary_(temporary_sibling(target_)) {
+  fd_ = ::open(temporary_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+  if (fd_ < 0) {
+    const int error = errno;
+    if (error == ENOSPC || error == EDQUOT) fail_write(target_, error);
+    fail("{}: cannot write: cannot create a file in this folder ({})", target_.string(),
+         std::strerror(error));
+  }
+  if (const int error = injected_errno(target_); error != 0) {
+    close_and_remove();
+    fail_write(target_, error);
+  }
+}
+
+TemporaryFile::~TemporaryFile() { close_and_remove(); }
+
+void TemporaryFile::close_and_remove() {
+  if (fd_ < 0) return;
+  ::close(fd_);
+  fd_ = -1;
+  std::error_code ignored;
+  std::filesystem::remove(temporary_, ignored);
+}
+
+void TemporaryFile::write_at(std::uint64_t offset, std::string_view bytes) {
+  if (fd_ < 0) fail("{}: cannot write: the file is already closed", target_.string());
+  for (std::size_t done = 0; done < bytes.size();) {
+    const ssize_t n =
+        ::pwrite(fd_, bytes.data() + done, bytes.size() - done, static_cast<off_t>(offset + done));
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const int error = errno;
+      close_and_remove();
+      fail_write(target_, error);
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  end_ = std::max<std::uint64_t>(end_, offset + bytes.size());
+}
+
+void TemporaryFile::commit() {
+  if (fd_ < 0) fail("{}: cannot write: the file is already closed", target_.string());
+  const int closed = ::close(fd_);
+  const int error = closed != 0 ? errno : 0;
+  fd_ = -1;
+  if (error != 0) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary_, ignored);
+    fail_write(target_, error);
+  }
+  commit_temporary(temporary_, target_);
 }
 
 }  // namespace lightstage::util

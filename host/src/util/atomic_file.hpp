@@ -5,6 +5,7 @@
 
 #include "lightstage/common/temporary_path.hpp"
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -26,5 +27,31 @@ std::filesystem::path write_temporary(const std::filesystem::path& target, std::
 
 // Writes `text` to `path` atomically; throws as write_temporary.
 void write_text_atomic(const std::filesystem::path& path, std::string_view text);
+
+// A file written in parts as they are made (an image's rows, band by band)
+// into a temporary sibling of `target`: commit() renames it over `target`;
+// destroyed uncommitted, it is removed. Throws as write_temporary.
+class TemporaryFile {
+ public:
+  explicit TemporaryFile(std::filesystem::path target);
+  ~TemporaryFile();
+  TemporaryFile(const TemporaryFile&) = delete;
+  TemporaryFile& operator=(const TemporaryFile&) = delete;
+
+  const std::filesystem::path& target() const { return target_; }
+  // `bytes` at `offset` (the file grows as needed), or after the furthest byte written.
+  void write_at(std::uint64_t offset, std::string_view bytes);
+  void append(std::string_view bytes) { write_at(end_, bytes); }
+  std::uint64_t end() const { return end_; }
+  // Closes the file and renames it over target().
+  void commit();
+
+ private:
+  void close_and_remove();
+
+  std::filesystem::path target_, temporary_;
+  int fd_ = -1;
+  std::uint64_t end_ = 0;
+};
 
 }  // namespace lightstage::util
