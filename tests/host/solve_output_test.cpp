@@ -1,4 +1,5 @@
 #include "lightstage/host/io/solve_output.hpp"
+#include "lightstage/host/io/solve_output_writer.hpp"
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/version.hpp"
@@ -7,6 +8,7 @@
 #include "lightstage/host/io/normal_map.hpp"
 #include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/solvers/lambertian.hpp"
+#include "lightstage/testing/errors.hpp"
 #include "lightstage/testing/paths.hpp"
 #include "synthetic.hpp"
 
@@ -14,7 +16,12 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
+#include <iterator>
+#include <limits>
+#include <vector>
 
 namespace lightstage {
 namespace {
@@ -197,6 +204,141 @@ TEST(HostSolveFolder, RefusesMapsOfAnotherSizeAndBadSummaries) {
   std::ofstream(dir / "summary.json") << "{ not json";
   EXPECT_THROW(io::read_solve_folder(dir), InputError);
   EXPECT_THROW(io::read_solve_folder(dir / "missing"), InputError);
+}
+
+}  // namespace
+}  // namespace lightstage
+
+namespace lightstage {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A result with every optional map: colour, confidence, a reflectance model and a choice per pixel;
+// its top rows and a band in the middle have no solved pixel.
+SolveResult full_result(cv::Size size) {
+  SolveResult r;
+  r.normals = cv::Mat(size, CV_32FC3, cv::Scalar::all(0));
+  r.albedo = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
+  r.residual = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
+  r.solved = cv::Mat(size, CV_8UC1, cv::Scalar::all(0));
+  r.confidence = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
+  r.chroma = cv::Mat(size, CV_32FC3, cv::Scalar::all(0));
+  r.coefficients = cv::Mat(size, CV_32FC(3), cv::Scalar::all(0));
+  r.choice = cv::Mat(size, CV_8UC1, cv::Scalar::all(0));
+  r.choices = {"biquadratic", "monotonic"};
+  r.reflectance = {{"model", "bipolynomial"}, {"order", 1}, {"terms", {"1", "x", "y"}}};
+  cv::RNG rng(7);
+  for (int y = 0; y < size.height; ++y) {
+    if (y < 6 || (y >= 13 && y < 17)) continue;
+    for (int x = 2; x < size.width - 1; ++x) {
+      const cv::Vec3f n = cv::normalize(cv::Vec3f(rng.uniform(-1.f, 1.f), rng.uniform(-1.f, 1.f), 1.f));
+      r.normals.at<cv::Vec3f>(y, x) = n;
+      r.albedo.at<float>(y, x) = rng.uniform(0.05f, 1.2f);
+      r.residual.at<float>(y, x) = rng.uniform(0.f, 0.01f);
+      r.solved.at<std::uint8_t>(y, x) = 255;
+      r.confidence.at<float>(y, x) = rng.uniform(0.f, 1.f);
+      r.chroma.at<cv::Vec3f>(y, x) = cv::Vec3f(rng.uniform(0.5f, 1.5f), 1.f, rng.uniform(0.5f, 1.5f));
+      r.coefficients.at<cv::Vec3f>(y, x) = cv::Vec3f(rng.uniform(0.f, 1.f), rng.uniform(-1.f, 1.f), 0.25f);
+      r.choice.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(1 + (x + y) % 2);
+    }
+  }
+  r.summary.method = "auto";
+  return r;
+}
+
+// Rows [y0, y0 + rows) of every map of `r`.
+SolveResult rows_of(const SolveResult& r, int y0, int rows) {
+  SolveResult band = r;
+  for (cv::Mat* map : {&band.normals, &band.albedo, &band.residual, &band.solved, &band.confidence,
+                       &band.chroma, &band.coefficients, &band.choice})
+    *map = map->rowRange(y0, y0 + rows).clone();
+  return band;
+}
+
+std::string bytes_of(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TEST(SolveOutputWriter, BandsWriteTheFilesOfTheWholeResultByteForByte) {
+  const cv::Size size(23, 29);
+  const SolveResult whole = full_result(size);
+  const fs::path dir = lightstage::testing::scratch_dir();
+  const nlohmann::json written = io::write_solve_outputs(dir / "whole", whole, "/in", {{"extra", 1}});
+  io::SolveOutputWriter writer(dir / "bands", size);
+  // Empty bands before the first pixel and in the middle, bands of every height.
+  writer.add_empty(4);
+  writer.add(rows_of(whole, 4, 5));
+  writer.add(rows_of(whole, 9, 4));
+  writer.add_empty(4);
+  for (int y = 17; y < size.height; y += 3) writer.add(rows_of(whole, y, std::min(3, size.height - y)));
+  EXPECT_FALSE(fs::exists(dir / "bands" / "normal.png")) << "files appear only when complete";
+  SolveResult meta = whole;
+  meta.normals = meta.albedo = cv::Mat();
+  nlohmann::json banded = writer.finish(meta, "/in", {{"extra", 1}});
+  for (nlohmann::json* summary : {&banded, const_cast<nlohmann::json*>(&written)}) summary->erase("time");
+  EXPECT_EQ(banded, written);
+  EXPECT_EQ(written["method_map"]["choices"][0]["pixels"].get<int>() +
+                written["method_map"]["choices"][1]["pixels"].get<int>(),
+            cv::countNonZero(whole.solved));
+  for (const auto& entry : fs::directory_iterator(dir / "whole")) {
+    const std::string name = entry.path().filename().string();
+    if (name == "summary.json") continue;
+    EXPECT_EQ(bytes_of(dir / "bands" / name), bytes_of(entry.path())) << name;
+  }
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir / "bands"), fs::directory_iterator()),
+            std::distance(fs::directory_iterator(dir / "whole"), fs::directory_iterator()));
+  // The PNG whites are the 99.5th percentiles of the solved values.
+  std::vector<float> solved;
+  for (int y = 0; y < size.height; ++y)
+    for (int x = 0; x < size.width; ++x)
+      if (whole.solved.at<std::uint8_t>(y, x) != 0) solved.push_back(whole.albedo.at<float>(y, x));
+  const auto at = static_cast<std::ptrdiff_t>(std::floor(0.995 * static_cast<double>(solved.size() - 1)));
+  std::nth_element(solved.begin(), solved.begin() + at, solved.end());
+  EXPECT_EQ(written["albedo_png_scale"].get<double>(),
+            static_cast<double>(solved[static_cast<std::size_t>(at)]));
+}
+
+TEST(SolveOutputWriter, BandsThatDisagreeOrDoNotCoverTheImageAreRefusedAndLeaveNoFile) {
+  const cv::Size size(23, 29);
+  const SolveResult whole = full_result(size);
+  const fs::path dir = lightstage::testing::scratch_dir();
+  {
+    io::SolveOutputWriter writer(dir / "a", size);
+    writer.add(rows_of(whole, 0, 10));
+    SolveResult grey = rows_of(whole, 10, 5);
+    grey.chroma = cv::Mat();
+    EXPECT_THAT(testing::error_of([&] { writer.add(grey); }),
+                ::testing::HasSubstr("no colour where the rows above had one"));
+    EXPECT_THAT(testing::error_of([&] { writer.add(rows_of(whole, 0, 20)); }),
+                ::testing::HasSubstr("20 more rows given after 10 of 29"));
+    EXPECT_THAT(testing::error_of([&] { writer.finish(whole, "/in", nlohmann::json::object()); }),
+                ::testing::HasSubstr("10 of 29 rows of the result given"));
+  }
+  EXPECT_TRUE(!fs::exists(dir / "a") || fs::is_empty(dir / "a"));
+}
+
+TEST(BandQuantile, EqualsNthElementOverEveryValueWhateverTheirSign) {
+  cv::RNG rng(3);
+  for (const int n : {1, 2, 17, 5000}) {
+    std::vector<float> values(static_cast<std::size_t>(n));
+    for (float& v : values)
+      v = rng.uniform(-2.f, 3.f) * static_cast<float>(rng.uniform(0, 3) == 0 ? 1e-3 : 1);
+    io::BandQuantile quantile;
+    for (std::size_t i = 0; i < values.size(); i += 7)
+      quantile.count(values.data() + i, std::min<std::size_t>(7, values.size() - i));
+    ASSERT_TRUE(quantile.locate(0.995));
+    for (std::size_t i = 0; i < values.size(); i += 5)
+      quantile.gather(values.data() + i, std::min<std::size_t>(5, values.size() - i));
+    const auto at = static_cast<std::ptrdiff_t>(std::floor(0.995 * (n - 1)));
+    std::nth_element(values.begin(), values.begin() + at, values.end());
+    EXPECT_EQ(quantile.value(), values[static_cast<std::size_t>(at)]) << n;
+  }
+  io::BandQuantile none;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  none.count(&nan, 1);
+  EXPECT_FALSE(none.locate(0.5));
 }
 
 }  // namespace

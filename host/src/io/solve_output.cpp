@@ -1,193 +1,24 @@
 #include "lightstage/host/io/solve_output.hpp"
 
 #include "lightstage/common/error.hpp"
-#include "lightstage/common/version.hpp"
 #include "lightstage/host/io/exr.hpp"
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/normal_map.hpp"
 #include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/reflectance/bipolynomial_model.hpp"
-#include "util/atomic_file.hpp"
-#include "util/utc_time.hpp"
 
 #include <fmt/format.h>
 
-#include <algorithm>
-#include <array>
 #include <cmath>
 #include <fstream>
-#include <system_error>
 #include <vector>
 
 namespace lightstage::io {
 
-namespace {
-
-// A PNG's white: the 99.5th percentile of every channel of `values` (CV_32FC1
-// or CV_32FC3) over the solved pixels, so that saturated colours keep their
-// hue; 1 when there are none or it is not positive.
-double png_white(const cv::Mat& values, const cv::Mat& solved) {
-  const int channels = values.channels();
-  std::vector<float> all;
-  for (int y = 0; y < values.rows; ++y) {
-    const float* row = values.ptr<float>(y);
-    for (int x = 0; x < values.cols; ++x)
-      if (solved.at<std::uint8_t>(y, x) != 0)
-        all.insert(all.end(), row + x * channels, row + (x + 1) * channels);
-  }
-  if (all.empty()) return 1.0;
-  const auto index = static_cast<std::size_t>(std::floor(0.995 * static_cast<double>(all.size() - 1)));
-  std::nth_element(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(index), all.end());
-  const double scale = all[index];
-  return std::isfinite(scale) && scale > 0 ? scale : 1.0;
-}
-
-// albedo (CV_32FC1) · chroma (CV_32FC3, BGR) per channel.
 cv::Mat times_chroma(const cv::Mat& albedo, const cv::Mat& chroma) {
   cv::Mat albedo3;
   cv::merge(std::vector<cv::Mat>{albedo, albedo, albedo}, albedo3);
   return albedo3.mul(chroma);
-}
-
-}  // namespace
-
-double albedo_png_scale(const SolveResult& result) { return png_white(result.albedo, result.solved); }
-
-namespace {
-
-// method_map.png's colours (RGB), one per choice in order; unsolved pixels are black.
-constexpr std::array<std::array<std::uint8_t, 3>, 8> kChoiceColours = {{{31, 119, 180},
-                                                                        {255, 127, 14},
-                                                                        {44, 160, 44},
-                                                                        {214, 39, 40},
-                                                                        {148, 103, 189},
-                                                                        {140, 86, 75},
-                                                                        {227, 119, 194},
-                                                                        {188, 189, 34}}};
-
-// The choice map as a picture, and its legend and counts under summary.method_map.
-void write_method_map(const std::filesystem::path& path, const SolveResult& result, nlohmann::json& summary) {
-  if (result.choice.type() != CV_8UC1 || result.choice.size() != result.normals.size())
-    fail("{}: the choice map must be CV_8UC1 of the normals' size", path.string());
-  if (result.choices.size() > kChoiceColours.size())
-    fail("{}: {} choices, at most {} have colours", path.string(), result.choices.size(),
-         kChoiceColours.size());
-  cv::Mat picture(result.choice.size(), CV_8UC3, cv::Scalar::all(0));
-  std::vector<std::size_t> counts(result.choices.size(), 0);
-  for (int y = 0; y < picture.rows; ++y) {
-    for (int x = 0; x < picture.cols; ++x) {
-      const int k = result.choice.at<std::uint8_t>(y, x);
-      if (k == 0 || k > static_cast<int>(counts.size())) continue;
-      ++counts[static_cast<std::size_t>(k - 1)];
-      const auto& rgb = kChoiceColours[static_cast<std::size_t>(k - 1)];
-      picture.at<cv::Vec3b>(y, x) = cv::Vec3b(rgb[2], rgb[1], rgb[0]);  // OpenCV stores BGR
-    }
-  }
-  write_png(path, picture);
-  nlohmann::json legend = nlohmann::json::array();
-  for (std::size_t k = 0; k < counts.size(); ++k) {
-    const auto& rgb = kChoiceColours[k];
-    legend.push_back({{"method", result.choices[k]},
-                      {"pixels", counts[k]},
-                      {"colour", fmt::format("#{:02x}{:02x}{:02x}", rgb[0], rgb[1], rgb[2])}});
-  }
-  summary["method_map"] = {{"file", path.filename().string()}, {"choices", legend}};
-  summary["files"]["method_map"] = path.filename().string();
-}
-
-// albedo · chroma (CV_32FC3, BGR) for a colour result, else empty.
-cv::Mat colour_albedo(const std::filesystem::path& dir, const SolveResult& result) {
-  if (result.chroma.empty()) return {};
-  if (result.chroma.type() != CV_32FC3 || result.chroma.size() != result.albedo.size())
-    fail("{}: cannot write solver outputs: the chroma must be CV_32FC3 of the albedo's size", dir.string());
-  return times_chroma(result.albedo, result.chroma);
-}
-
-}  // namespace
-
-nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const SolveResult& result,
-                                   const std::filesystem::path& input, const nlohmann::json& extra) {
-  if (result.normals.type() != CV_32FC3 || result.albedo.type() != CV_32FC1 ||
-      result.residual.type() != CV_32FC1 || result.solved.type() != CV_8UC1 ||
-      result.albedo.size() != result.normals.size() || result.residual.size() != result.normals.size() ||
-      result.solved.size() != result.normals.size()) {
-    fail("{}: cannot write solver outputs: result maps are missing or of the wrong type/size", dir.string());
-  }
-  if (!extra.is_object())
-    fail("{}: summary extras must be a JSON object, got {}", dir.string(), extra.type_name());
-  std::error_code error;
-  std::filesystem::create_directories(dir, error);
-  if (error) fail("{}: cannot create folder: {}", dir.string(), error.message());
-
-  write_normal_map(dir / "normal.png", result.normals, result.solved);
-  write_normal_visualisation(dir / "normal_vis.png", result.normals, result.solved);
-  const double scale = albedo_png_scale(result);
-  cv::Mat albedo16;
-  cv::Mat scaled = result.albedo / scale;
-  cv::min(scaled, 1.0, scaled);
-  cv::max(scaled, 0.0, scaled);
-  scaled.convertTo(albedo16, CV_16UC1, 65535.0);  // convertTo rounds to nearest
-  write_png16(dir / "albedo.png", albedo16);
-  write_pfm(dir / "albedo.pfm", result.albedo);
-  write_pfm(dir / "residual.pfm", result.residual);
-  write_exr(dir / "normal.exr", result.normals, {"R", "G", "B"});  // R = x, as in normal.png
-  write_exr(dir / "albedo.exr", result.albedo, {"Y"});
-  const cv::Mat colour = colour_albedo(dir, result);
-  const double colour_scale = colour.empty() ? scale : png_white(colour, result.solved);
-  if (!colour.empty()) {
-    write_pfm(dir / "albedo_rgb.pfm", colour);
-    write_exr(dir / "albedo_rgb.exr", colour, {"B", "G", "R"});
-    cv::Mat colour16;
-    cv::Mat shown = colour / colour_scale;
-    cv::min(shown, 1.0, shown);
-    cv::max(shown, 0.0, shown);
-    shown.convertTo(colour16, CV_16UC3, 65535.0);
-    write_png16(dir / "albedo_rgb.png", colour16);
-  }
-
-  nlohmann::json summary = result.summary.to_json();
-  summary["parameters"] = result.parameters;
-  summary["time"] = util::utc_timestamp();
-  summary["input"] = input.string();
-  summary["software"] = std::string("lightstage ") + kVersion;
-  summary["width"] = result.normals.cols;
-  summary["height"] = result.normals.rows;
-  summary["albedo_png_scale"] = scale;
-  summary["files"] = {{"normals", "normal.png"},    {"normals_visualisation", "normal_vis.png"},
-                      {"albedo", "albedo.png"},     {"albedo_float", "albedo.pfm"},
-                      {"residual", "residual.pfm"}, {"normals_exr", "normal.exr"},
-                      {"albedo_exr", "albedo.exr"}};
-  if (!colour.empty()) {
-    summary["albedo_rgb_png_scale"] = colour_scale;
-    summary["files"]["albedo_colour"] = "albedo_rgb.png";
-    summary["files"]["albedo_colour_float"] = "albedo_rgb.pfm";
-    summary["files"]["albedo_colour_exr"] = "albedo_rgb.exr";
-  }
-  // Optional per-pixel outputs: confidence and a per-pixel reflectance model (one PFM per coefficient).
-  if (!result.confidence.empty()) {
-    write_pfm(dir / "confidence.pfm", result.confidence);
-    summary["files"]["confidence"] = "confidence.pfm";
-  }
-  if (!result.coefficients.empty()) {
-    std::vector<cv::Mat> planes;
-    cv::split(result.coefficients, planes);
-    nlohmann::json names = nlohmann::json::array();
-    const auto& terms = result.reflectance.is_object()
-                            ? result.reflectance.value("terms", nlohmann::json::array())
-                            : nlohmann::json::array();
-    for (std::size_t c = 0; c < planes.size(); ++c) {
-      const std::string term = c < terms.size() ? terms[c].get<std::string>() : std::to_string(c);
-      const std::string name = "brdf_" + term + ".pfm";
-      write_pfm(dir / name, planes[c]);
-      names.push_back(name);
-    }
-    summary["files"]["brdf"] = names;
-  }
-  if (!result.choice.empty()) write_method_map(dir / "method_map.png", result, summary);
-  if (!result.reflectance.is_null()) summary["reflectance"] = result.reflectance;
-  for (const auto& [key, value] : extra.items()) summary[key] = value;
-  util::write_text_atomic(dir / "summary.json", summary.dump(2) + "\n");
-  return summary;
 }
 
 namespace {

@@ -32,16 +32,16 @@
 
 namespace lightstage::io {
 
-// Writes the files above into `dir` (created if needed), each atomically.
+// Writes the files above into `dir` (created if needed), each atomically
+// (through SolveOutputWriter, solve_output_writer.hpp, as one band).
 // `input` is recorded as the input folder; keys of `extra` (an object) are
 // added to summary.json. Returns the JSON written to summary.json.
 nlohmann::json write_solve_outputs(const std::filesystem::path& dir, const SolveResult& result,
                                    const std::filesystem::path& input,
                                    const nlohmann::json& extra = nlohmann::json::object());
 
-// The albedo scale used for albedo.png: the 99.5th percentile of the albedo
-// over solved pixels, or 1 when there are none (or it is not positive).
-double albedo_png_scale(const SolveResult& result);
+// The colour albedo: albedo (CV_32FC1) · chroma (CV_32FC3, BGR) per channel.
+cv::Mat times_chroma(const cv::Mat& albedo, const cv::Mat& chroma);
 
 // A solve folder read back. Every reader of solve results (report, integrate,
 // relight, reflectance, the demo) goes through this, so the files are decoded
