@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace lightstage::pipeline::bands {
 namespace {
@@ -40,14 +41,7 @@ void BandResults::add(const SolveResult& band, int y0) {
     whole_.summary.settings = band.summary.settings;
     started_ = true;
   }
-  paste(band.normals, y0, size_, whole_.normals);
-  paste(band.albedo, y0, size_, whole_.albedo);
-  paste(band.residual, y0, size_, whole_.residual);
-  paste(band.solved, y0, size_, whole_.solved);
-  paste(band.confidence, y0, size_, whole_.confidence);
-  paste(band.chroma, y0, size_, whole_.chroma);
-  paste(band.coefficients, y0, size_, whole_.coefficients);
-  paste(band.choice, y0, size_, whole_.choice);
+  if (keep_maps_) paste_maps(band, y0);
   SolveSummary& s = whole_.summary;
   const SolveSummary& b = band.summary;
   s.pixels_in_mask += b.pixels_in_mask;
@@ -63,10 +57,19 @@ void BandResults::add(const SolveResult& band, int y0) {
     iterations_ += std::round(f->value.get<double>() * static_cast<double>(b.pixels_solved));
 }
 
+void BandResults::paste_maps(const SolveResult& band, int y0) {
+  for (auto [from, to] :
+       {std::pair{&band.normals, &whole_.normals}, std::pair{&band.albedo, &whole_.albedo},
+        std::pair{&band.residual, &whole_.residual}, std::pair{&band.solved, &whole_.solved},
+        std::pair{&band.confidence, &whole_.confidence}, std::pair{&band.chroma, &whole_.chroma},
+        std::pair{&band.coefficients, &whole_.coefficients}, std::pair{&band.choice, &whole_.choice}})
+    paste(*from, y0, size_, *to);
+}
+
 SolveResult BandResults::finish() {
   // Maps a method always writes stay whole-image sized when no band had a pixel.
   for (cv::Mat* map : {&whole_.normals, &whole_.albedo, &whole_.residual, &whole_.solved}) {
-    if (!map->empty()) continue;
+    if (!keep_maps_ || !map->empty()) continue;
     const int type = map == &whole_.normals ? CV_32FC3 : map == &whole_.solved ? CV_8UC1 : CV_32FC1;
     *map = cv::Mat(size_, type, cv::Scalar::all(0));
   }
@@ -143,17 +146,22 @@ ShadowThreshold BandSolver::shadow_threshold() {
 }
 
 SolveResult BandSolver::solve_rows(int begin, int end, const ShadowThreshold& threshold,
-                                   AngularErrorAccumulator& error, bool& has_ground_truth) {
+                                   AngularErrorAccumulator& error, bool& has_ground_truth,
+                                   const BandSink& sink) {
   std::optional<SolvePlan> solve_plan;
-  BandResults results({size().width, end - begin});
+  BandResults results({size().width, end - begin}, /*keep_maps=*/false);
   for_each_band(begin, end, [&](ImageStack& band, Observations& observations, int y0) {
     const nlohmann::json model =
         set_light_model(input_, band, applied_, calibration_, observations, /*warn=*/light_model_.is_null());
     if (light_model_.is_null()) light_model_ = model;
     if (!solve_plan) solve_plan = plan_solve(observations, settings_, threshold);
-    if (observations.pixel_count() == 0) return;
+    if (observations.pixel_count() == 0) {
+      sink(SolveResult{}, observations.size.height);
+      return;
+    }
     const SolveResult result = solve_planned(observations, *solve_plan, /*refit_relighting=*/false);
     results.add(result, y0 - begin);
+    sink(result, observations.size.height);
     if (!light_statistics_) {
       std::vector<std::string> files;
       for (const Frame& frame : meta_.frames) files.push_back(frame.filename);
@@ -183,7 +191,7 @@ nlohmann::json BandSolver::describe() const {
 }
 
 SolveReport write_band_solve(const std::filesystem::path& input, const std::filesystem::path& out,
-                             const SolveResult& result, nlohmann::json extra,
+                             io::SolveOutputWriter& writer, const SolveResult& result, nlohmann::json extra,
                              const std::optional<AngularErrorStats>& error) {
   if (result.summary.pixels_solved == 0)
     fail("{}: {} solved no pixel: {}", input.string(), result.summary.method,
@@ -193,7 +201,7 @@ SolveReport write_band_solve(const std::filesystem::path& input, const std::file
     report.error = error;
     extra["error_vs_ground_truth"] = error->to_json();
   }
-  report.summary = io::write_solve_outputs(out, result, input, extra);
+  report.summary = writer.finish(result, input, extra);
   logger("host")->info("{}", result.summary.message);
   write_result_report(out, input, /*light_statistics=*/extra.contains("light_statistics"));
   return report;

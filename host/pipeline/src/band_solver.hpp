@@ -5,6 +5,7 @@
 
 #include "lightstage/host/calibration/apply_calibration.hpp"
 #include "lightstage/host/eval/angular_error.hpp"
+#include "lightstage/host/io/solve_output_writer.hpp"
 #include "lightstage/host/io/stack_bands.hpp"
 #include "lightstage/host/report/light_statistics.hpp"
 #include "lightstage/host/shadow_threshold.hpp"
@@ -23,19 +24,23 @@
 namespace lightstage::pipeline::bands {
 
 // Results of bands (or of tiles, each itself the result of its bands) made
-// into the whole image's: maps pasted at their rows, counts added, the facts
-// that depend on the data (normals facing away, l1/sbl iterations per pixel)
-// merged exactly.
+// into the whole image's: counts added, the facts that depend on the data
+// (normals facing away, l1/sbl iterations per pixel) merged exactly, and with
+// `keep_maps` the maps pasted at their rows (a tile job's; a whole image's
+// maps go to a SolveOutputWriter band by band instead).
 class BandResults {
  public:
-  explicit BandResults(cv::Size size) : size_(size) {}
+  BandResults(cv::Size size, bool keep_maps) : size_(size), keep_maps_(keep_maps) {}
 
   // `band` holds rows [y0, y0 + band.normals.rows) of the whole image.
   void add(const SolveResult& band, int y0);
   SolveResult finish();
 
  private:
+  void paste_maps(const SolveResult& band, int y0);
+
   cv::Size size_;
+  bool keep_maps_;
   SolveResult whole_;
   bool started_ = false;
   std::size_t facing_away_ = 0;
@@ -60,11 +65,15 @@ class BandSolver {
   // (with --shadow-threshold, a default the flag's value replaces: no pass).
   ShadowThreshold shadow_threshold();
 
-  // Pass 2: rows [begin, end) solved band by band with `threshold`, as one
-  // result of end - begin rows; their angular error against the ground
-  // truth is added to `error` when the stack has one.
+  // Each band's result in turn, top to bottom; one whose normals are empty
+  // stands for `rows` rows without a pixel to solve.
+  using BandSink = std::function<void(const SolveResult& band, int rows)>;
+  // Pass 2: rows [begin, end) solved band by band with `threshold`, each band
+  // given to `sink`; returns what the bands say together (counts, facts,
+  // parameters: no maps). Their angular error against the ground truth is
+  // added to `error` when the stack has one.
   SolveResult solve_rows(int begin, int end, const ShadowThreshold& threshold, AngularErrorAccumulator& error,
-                         bool& has_ground_truth);
+                         bool& has_ground_truth, const BandSink& sink);
 
   // The per-light statistics of the rows solved so far (nullopt before a band with a mask pixel).
   const std::optional<report::LightStatisticsTally>& light_statistics() const { return light_statistics_; }
@@ -96,12 +105,13 @@ class BandSolver {
   std::optional<report::LightStatisticsTally> light_statistics_;
 };
 
-// Writes the solve folder of a result made of bands: the maps, summary.json
-// with `extra` and the error, and the report (per-light statistics only from
-// extra's "light_statistics": the report must not read the whole stack at
-// once). Throws InputError, writing nothing, when no pixel was solved.
+// Finishes the solve folder of a result made of bands, whose maps `writer`
+// was given: summary.json with `extra` and the error, and the report
+// (per-light statistics only from extra's "light_statistics": the report must
+// not read the whole stack at once). Throws InputError, leaving nothing, when
+// no pixel was solved.
 SolveReport write_band_solve(const std::filesystem::path& input, const std::filesystem::path& out,
-                             const SolveResult& result, nlohmann::json extra,
+                             io::SolveOutputWriter& writer, const SolveResult& result, nlohmann::json extra,
                              const std::optional<AngularErrorStats>& error);
 
 }  // namespace lightstage::pipeline::bands

@@ -22,9 +22,11 @@ namespace {
 constexpr std::size_t kObservationBytes = 5;  // per image
 constexpr std::size_t kPixelBytes = 8 + 12 + 24 + 1;
 constexpr std::size_t kMapBytes = 12 + 4 + 4 + 1 + 4 + 4 + 12 + 1;
-// The whole image's maps while they are written and the report is made of them (encoded images held in
-// memory, measured).
-constexpr std::size_t kWritingBytes = 100;
+// Held for the whole image while bands are solved: the stack's and the region's masks, the background
+// sample, the solved map the output writer keeps, the angular error of each pixel against ground truth.
+constexpr std::size_t kHeldBytes = 16;
+// The report, made after the solve from the result's maps read whole (77 bytes a pixel measured at 4 Mpx).
+constexpr std::size_t kReportBytes = 100;
 constexpr std::size_t kUnknownPixelBytes = 12;  // float RGB, the most a frame pixel takes
 // The program itself before it reads a stack: code, libraries, allocator (65-78 MB measured for
 // `lightstage`).
@@ -36,11 +38,8 @@ constexpr std::array kBandMethods = {"l2", "robust", "monotonic", "l1", "sbl"};
 }  // namespace
 
 nlohmann::json BandPlan::to_json() const {
-  return {{"whole_bytes", whole_bytes},
-          {"fixed_bytes", fixed_bytes},
-          {"row_bytes", row_bytes},
-          {"band_rows", band_rows},
-          {"bands", bands}};
+  return {{"whole_bytes", whole_bytes},   {"fixed_bytes", fixed_bytes}, {"row_bytes", row_bytes},
+          {"report_bytes", report_bytes}, {"band_rows", band_rows},     {"bands", bands}};
 }
 
 BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit) {
@@ -54,11 +53,13 @@ BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit) {
       static_cast<std::size_t>(stack.pixel_bytes > 0 ? stack.pixel_bytes : kUnknownPixelBytes);
   const std::size_t decoded = width * (pixel_bytes * (images + stack.dark_files) + kGroundTruthBytes);
   BandPlan plan;
+  plan.limit_bytes = memory_limit;
   plan.row_bytes = decoded + width * (kObservationBytes * images + kPixelBytes + kMapBytes);
-  // The program, the whole image's maps, the mask and the background sample, and the writing of the maps.
-  plan.fixed_bytes = kProcessBytes + pixels * (kMapBytes + 2 + kWritingBytes);
+  // The program and what is held for the whole image; the output maps go to their files band by band.
+  plan.fixed_bytes = kProcessBytes + pixels * kHeldBytes;
+  plan.report_bytes = kProcessBytes + pixels * kReportBytes;
   plan.whole_bytes =
-      kProcessBytes + plan.row_bytes * static_cast<std::size_t>(size.height) + pixels * kWritingBytes;
+      std::max(plan.fixed_bytes + plan.row_bytes * static_cast<std::size_t>(size.height), plan.report_bytes);
   if (plan.whole_bytes <= memory_limit) {
     plan.band_rows = size.height;
     plan.bands = 1;
@@ -66,8 +67,8 @@ BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit) {
   }
   if (memory_limit < plan.fixed_bytes + plan.row_bytes)
     fail(
-        "--memory-limit {}: too small for this stack ({}x{}, {} images): its output maps take {} and a band "
-        "of one row {} more",
+        "--memory-limit {}: too small for this stack ({}x{}, {} images): what is held for the whole image "
+        "takes {} and a band of one row {} more",
         describe_bytes(memory_limit), size.width, size.height, images, describe_bytes(plan.fixed_bytes),
         describe_bytes(plan.row_bytes));
   plan.band_rows = static_cast<int>(std::min<std::size_t>((memory_limit - plan.fixed_bytes) / plan.row_bytes,
@@ -89,13 +90,24 @@ SolveReport solve_folder_in_bands(const std::filesystem::path& input, const Solv
   io::require_separate_output(out, {input});
   logger("host")->info("{}: {} to solve whole; solving in {} bands of {} rows", input.string(),
                        describe_bytes(plan.whole_bytes), plan.bands, plan.band_rows);
+  if (plan.report_bytes > plan.limit_bytes)
+    logger("host")->warn(
+        "{}: the report reads the result's maps whole and will take about {}, over --memory-limit {}",
+        input.string(), describe_bytes(plan.report_bytes), describe_bytes(plan.limit_bytes));
   const ShadowThreshold threshold = solver.shadow_threshold();
   AngularErrorAccumulator error;
   bool ground_truth = false;
-  const SolveResult result = solver.solve_rows(0, solver.size().height, threshold, error, ground_truth);
+  io::SolveOutputWriter writer(out, solver.size());
+  const SolveResult result = solver.solve_rows(0, solver.size().height, threshold, error, ground_truth,
+                                               [&writer](const SolveResult& band, int rows) {
+                                                 if (band.normals.empty())
+                                                   writer.add_empty(rows);
+                                                 else
+                                                   writer.add(band);
+                                               });
   nlohmann::json extra = solver.describe();
   if (solver.light_statistics()) extra["light_statistics"] = solver.light_statistics()->summary_json();
-  return bands::write_band_solve(input, out, result, extra,
+  return bands::write_band_solve(input, out, writer, result, extra,
                                  ground_truth ? std::optional(error.stats()) : std::nullopt);
 }
 

@@ -267,7 +267,14 @@ SolveReport solve_one_tile(const fs::path& input, const SolveSettings& settings,
       shared_shadow_threshold(solver, out, observations_key(input, settings, calibration));
   AngularErrorAccumulator unused;
   bool ground_truth = false;
-  const SolveResult result = solver.solve_rows(first, end, threshold, unused, ground_truth);
+  // A tile's maps are held (its rows only) and written as its part.
+  bands::BandResults maps({solver.size().width, end - first}, /*keep_maps=*/true);
+  int row = 0;
+  solver.solve_rows(first, end, threshold, unused, ground_truth, [&](const SolveResult& band, int rows) {
+    if (!band.normals.empty()) maps.add(band, row);
+    row += rows;
+  });
+  const SolveResult result = maps.finish();
   json info = {
       {"key", run_key(input, settings, calibration)},
       {"tile", {{"index", job.index}, {"count", job.count}, {"first_row", first}, {"rows", end - first}}},
@@ -324,9 +331,13 @@ SolveReport merge_tiles(const fs::path& input, const SolveSettings& settings, co
   const std::vector<fs::path> parts = find_parts(out);
   const json key = run_key(input, settings, calibration);
   std::optional<bands::BandResults> results;
+  std::optional<io::SolveOutputWriter> writer;
   std::optional<report::LightStatisticsTally> light_statistics;
   json first;
-  bool ground_truth = false;
+  // The ground truth the jobs saw, read again here without the frames, and the error part by part.
+  std::optional<ImageStack> truth;
+  cv::Rect region;
+  AngularErrorAccumulator error;
   for (const fs::path& part : parts) {
     const json j = read_part_json(part);
     if (j.value("key", json()) != key)
@@ -334,7 +345,9 @@ SolveReport merge_tiles(const fs::path& input, const SolveSettings& settings, co
            key_differences(key, j.value("key", json::object())));
     if (first.is_null()) {
       first = j;
-      results.emplace(cv::Size(j.at("width").get<int>(), j.at("height").get<int>()));
+      const cv::Size size(j.at("width").get<int>(), j.at("height").get<int>());
+      results.emplace(size, /*keep_maps=*/false);
+      writer.emplace(out, size);
     } else if (j.value("shadow_threshold", json()) != first["shadow_threshold"]) {
       fail(
           "{}: solved with another shadow threshold than {} ({} against {}): run --tile prepare, then every "
@@ -353,27 +366,32 @@ SolveReport merge_tiles(const fs::path& input, const SolveSettings& settings, co
         light_statistics = tally;
     }
     // A tile without a mask pixel holds zeros only, and no method facts.
-    if (result.summary.pixels_in_mask > 0) results->add(result, j.at("tile").at("first_row").get<int>());
-    ground_truth = ground_truth || j.value("ground_truth", false);
+    const int first_row = j.at("tile").at("first_row").get<int>(), rows = j.at("tile").at("rows").get<int>();
+    if (result.summary.pixels_in_mask == 0) {
+      writer->add_empty(rows);
+      continue;
+    }
+    results->add(result, first_row);
+    writer->add(result);
+    if (!j.value("ground_truth", false)) continue;
+    if (!truth) {
+      io::LoadOptions options;
+      options.frame_pixels = false;
+      truth = io::load_stack(input, options);
+      if (!truth->ground_truth || truth->ground_truth->normals.empty())
+        fail("{}: the tile jobs read ground truth that is gone", input.string());
+      region = solve_region(settings, truth->ground_truth->normals.size(), input);
+    }
+    const cv::Rect rows_of_part(region.x, region.y + first_row, region.width, rows);
+    error.add(result.normals, truth->ground_truth->normals(rows_of_part),
+              truth->mask.empty() ? cv::Mat() : truth->mask(rows_of_part));
   }
   const SolveResult result = results->finish();
   json extra = first.at("describe");
   extra["bands"]["tiles"] = parts.size();
   if (light_statistics) extra["light_statistics"] = light_statistics->summary_json();
-  std::optional<AngularErrorStats> error;
-  if (ground_truth) {  // the jobs saw it; read again here, without the frames
-    io::LoadOptions options;
-    options.frame_pixels = false;
-    const ImageStack stack = io::load_stack(input, options);
-    if (!stack.ground_truth || stack.ground_truth->normals.empty())
-      fail("{}: the tile jobs read ground truth that is gone", input.string());
-    const cv::Mat& truth = stack.ground_truth->normals;
-    const cv::Rect region = solve_region(settings, truth.size(), input);
-    AngularErrorAccumulator accumulator;
-    accumulator.add(result.normals, truth(region), stack.mask.empty() ? cv::Mat() : stack.mask(region));
-    error = accumulator.stats();
-  }
-  SolveReport report = bands::write_band_solve(input, out, result, extra, error);
+  SolveReport report = bands::write_band_solve(input, out, *writer, result, extra,
+                                               truth ? std::optional(error.stats()) : std::nullopt);
   fs::remove_all(tiles_folder(out));
   return report;
 }
