@@ -19,6 +19,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using testing::Bench;
+using testing::device_error_of;
 
 Rig rig_of(int leds, double max_on_us = 2'000'000) {
   Rig rig;
@@ -49,18 +50,6 @@ ImageStack load(const fs::path& dir) {
   io::LoadOptions options;
   options.min_images = 1;
   return io::load_stack(dir, options);
-}
-
-// The device failed: the message, which must not be an InputError.
-std::string device_error_of(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const InputError& e) {
-    return std::string("(InputError) ") + e.what();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
 }
 
 TEST(CaptureSession, AnExposureTooLongForAnLedIsRefusedBeforeAnyDarkIsTaken) {

@@ -16,7 +16,6 @@
 
 #include <cerrno>
 #include <filesystem>
-#include <functional>
 #include <string>
 #include <vector>
 
@@ -24,6 +23,7 @@ namespace lightstage {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::device_error_of;
 using testing::error_of;
 using ::testing::HasSubstr;
 
@@ -49,18 +49,6 @@ void expect_same(const cv::Mat& actual, const cv::Mat& expected, const std::stri
   ASSERT_EQ(actual.type(), expected.type()) << what;
   ASSERT_EQ(actual.size(), expected.size()) << what;
   EXPECT_EQ(cv::norm(actual, expected, cv::NORM_INF), 0) << what;
-}
-
-// A full disk is not the input's fault: an Error, not an InputError.
-std::string error_message(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const InputError& e) {
-    return std::string("InputError: ") + e.what();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
 }
 
 std::vector<std::string> files_in(const fs::path& dir) {
@@ -125,7 +113,7 @@ TEST(RowWriter, AFullDiskIsAnErrorNamingTheFileAndLeavesNothing) {
   const fs::path dir = lightstage::testing::scratch_dir();
   const io::ScopedWriteFault full([](const fs::path&) { return ENOSPC; });
   for (const char* name : {"n.png", "n.pfm", "n.exr"}) {
-    const std::string message = error_message([&] {
+    const std::string message = device_error_of([&] {
       const fs::path file = dir / name;
       const std::string extension = file.extension().string();
       const auto writer = extension == ".png"   ? io::open_png_writer(file, kSize, CV_16UC3)
