@@ -7,6 +7,7 @@
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/normal_map.hpp"
 #include "lightstage/host/io/pfm.hpp"
+#include "lightstage/host/io/write_fault.hpp"
 #include "lightstage/host/solvers/lambertian.hpp"
 #include "lightstage/testing/errors.hpp"
 #include "lightstage/testing/paths.hpp"
@@ -17,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -317,6 +319,20 @@ TEST(SolveOutputWriter, BandsThatDisagreeOrDoNotCoverTheImageAreRefusedAndLeaveN
                 ::testing::HasSubstr("10 of 29 rows of the result given"));
   }
   EXPECT_TRUE(!fs::exists(dir / "a") || fs::is_empty(dir / "a"));
+}
+
+TEST(SolveOutputWriter, AFinishThatFailsHalfWayTakesBackTheFilesItHadWritten) {
+  const cv::Size size(23, 29);
+  const SolveResult whole = full_result(size);
+  const fs::path dir = lightstage::testing::scratch_dir();
+  {
+    // albedo.png is written after the float maps are in place: a full disk then.
+    const io::ScopedWriteFault full(
+        [](const fs::path& target) { return target.filename() == "albedo.png" ? ENOSPC : 0; });
+    EXPECT_THAT(testing::device_error_of([&] { io::write_solve_outputs(dir / "out", whole, "/in"); }),
+                ::testing::HasSubstr("albedo.png: cannot write: no space left on the device"));
+  }
+  EXPECT_FALSE(fs::exists(dir / "out"));
 }
 
 TEST(BandQuantile, EqualsNthElementOverEveryValueWhateverTheirSign) {

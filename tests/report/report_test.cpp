@@ -181,6 +181,9 @@ TEST(LightStatistics, PartsAddUpToTheWholeAndComeBackFromJson) {
             std::string::npos);
   report::LightStatisticsTally other({"a.png"}, {0.01, "the default"});
   EXPECT_NE(testing::error_of([&] { twice.add(other); }).find("different frames"), std::string::npos);
+  report::LightStatisticsTally other_threshold(files, {0.5, "--shadow-threshold"});
+  EXPECT_NE(testing::error_of([&] { twice.add(other_threshold); }).find("different shadow thresholds"),
+            std::string::npos);
 }
 
 TEST(Report, ShowsThePerLightStatisticsTheSolveRecordedWithoutDecodingTheStack) {

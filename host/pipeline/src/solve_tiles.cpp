@@ -333,11 +333,13 @@ SolveReport merge_tiles(const fs::path& input, const SolveSettings& settings, co
   std::optional<bands::BandResults> results;
   std::optional<io::SolveOutputWriter> writer;
   std::optional<report::LightStatisticsTally> light_statistics;
+  bool statistics_complete = true;
   json first;
   // The ground truth the jobs saw, read again here without the frames, and the error part by part.
   std::optional<ImageStack> truth;
   cv::Rect region;
   AngularErrorAccumulator error;
+  int next_row = 0;
   for (const fs::path& part : parts) {
     const json j = read_part_json(part);
     if (j.value("key", json()) != key)
@@ -358,15 +360,22 @@ SolveReport merge_tiles(const fs::path& input, const SolveSettings& settings, co
       fail("{}: an image of another size than {}", part.string(), parts.front().string());
     }
     const SolveResult result = read_part(part, j);
-    if (const auto it = j.find("light_statistics"); it != j.end()) {
+    if (const auto it = j.find("light_statistics"); it != j.end() && statistics_complete) {
       const auto tally = report::LightStatisticsTally::from_json(*it, (part / "part.json").string());
       if (light_statistics)
         light_statistics->add(tally);
       else
         light_statistics = tally;
+    } else if (result.summary.pixels_in_mask > 0) {
+      statistics_complete = false;  // a part without them: none rather than some of the pixels' statistics
+      light_statistics.reset();
     }
     // A tile without a mask pixel holds zeros only, and no method facts.
     const int first_row = j.at("tile").at("first_row").get<int>(), rows = j.at("tile").at("rows").get<int>();
+    if (first_row != next_row)
+      fail("{}: rows {} to {}, where the parts before end at row {}: run its tile again", part.string(),
+           first_row, first_row + rows - 1, next_row);
+    next_row += rows;
     if (result.summary.pixels_in_mask == 0) {
       writer->add_empty(rows);
       continue;

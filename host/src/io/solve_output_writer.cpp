@@ -94,7 +94,7 @@ bool BandQuantile::locate(double q) {
     if (index < histogram_[b]) {
       bucket_ = b;
       rank_ = index;
-      kept_.reserve(histogram_[b]);
+      std::fill(histogram_.begin(), histogram_.end(), 0);  // now the bucket's low 16 bits
       return true;
     }
     index -= histogram_[b];
@@ -103,14 +103,24 @@ bool BandQuantile::locate(double q) {
 }
 
 void BandQuantile::gather(const float* values, std::size_t n) {
-  for (std::size_t i = 0; i < n; ++i)
-    if (std::isfinite(values[i]) && order_key(values[i]) >> 16 == bucket_) kept_.push_back(values[i]);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(values[i])) continue;
+    const std::uint32_t key = order_key(values[i]);
+    if (key >> 16 == bucket_) ++histogram_[key & 0xffffU];
+  }
 }
 
-float BandQuantile::value() {
-  if (rank_ >= kept_.size()) fail("BandQuantile: the values gathered again are not the values counted");
-  std::nth_element(kept_.begin(), kept_.begin() + static_cast<std::ptrdiff_t>(rank_), kept_.end());
-  return kept_[rank_];
+float BandQuantile::value() const {
+  std::uint64_t index = rank_;
+  for (std::uint32_t low = 0; low < histogram_.size(); ++low) {
+    if (index < histogram_[low]) {
+      // The key back to its float.
+      const std::uint32_t key = bucket_ << 16 | low;
+      return std::bit_cast<float>((key & 0x80000000U) != 0 ? key & 0x7fffffffU : ~key);
+    }
+    index -= histogram_[low];
+  }
+  fail("BandQuantile: the values gathered again are not the values counted");
 }
 
 SolveOutputWriter::SolveOutputWriter(fs::path dir, cv::Size size) : dir_(std::move(dir)), size_(size) {
@@ -129,6 +139,7 @@ SolveOutputWriter::~SolveOutputWriter() {
     writer->reset();
   coefficient_pfms_.clear();
   std::error_code ignored;
+  for (const fs::path& file : committed_) fs::remove(file, ignored);  // a finish that failed half way
   if (created_ && fs::is_empty(dir_, ignored)) fs::remove(dir_, ignored);
 }
 
@@ -215,6 +226,15 @@ void SolveOutputWriter::write_rows(const SolveResult& band) {
   need(band.confidence, confidence_pfm_ != nullptr, "confidence map");
   need(band.coefficients, !coefficient_pfms_.empty(), "reflectance model");
   need(band.choice, method_map_ != nullptr, "method map");
+  if (!band.confidence.empty() &&
+      (band.confidence.type() != CV_32FC1 || band.confidence.size() != band.normals.size()))
+    fail("{}: rows {}-{}: the confidence must be CV_32FC1 of the normals' size", dir_.string(), rows_,
+         rows_ + rows - 1);
+  if (!coefficient_pfms_.empty() &&
+      (band.coefficients.channels() != static_cast<int>(coefficient_pfms_.size()) ||
+       band.coefficients.size() != band.normals.size() || band.coefficients.depth() != CV_32F))
+    fail("{}: rows {}-{}: the reflectance model has {} coefficients, the rows above {}", dir_.string(), rows_,
+         rows_ + rows - 1, band.coefficients.channels(), coefficient_pfms_.size());
   band.solved.copyTo(solved_.rowRange(rows_, rows_ + rows));
   normal_png_->write(encode_normal_map(band.normals, band.solved));
   normal_vis_->write(normal_visualisation(band.normals, band.solved));
@@ -238,10 +258,6 @@ void SolveOutputWriter::write_rows(const SolveResult& band) {
   }
   if (confidence_pfm_) confidence_pfm_->write(band.confidence);
   if (!coefficient_pfms_.empty()) {
-    if (band.coefficients.channels() != static_cast<int>(coefficient_pfms_.size()) ||
-        band.coefficients.size() != band.normals.size() || band.coefficients.depth() != CV_32F)
-      fail("{}: rows {}-{}: the reflectance model has {} coefficients, the rows above {}", dir_.string(),
-           rows_, rows_ + rows - 1, band.coefficients.channels(), coefficient_pfms_.size());
     std::vector<cv::Mat> planes;
     cv::split(band.coefficients, planes);
     for (std::size_t c = 0; c < planes.size(); ++c) coefficient_pfms_[c]->write(planes[c]);
@@ -270,10 +286,14 @@ nlohmann::json SolveOutputWriter::finish(const SolveResult& result, const fs::pa
     fail("{}: {} of {} rows of the result given: the solve folder is not complete", dir_.string(), rows_,
          size_.height);
   if (!opened_) open(SolveResult{});
+  const auto commit = [&](RowWriter& writer) {
+    writer.commit();
+    committed_.push_back(writer.path());
+  };
   for (auto* writer : {&normal_png_, &normal_vis_, &albedo_pfm_, &residual_pfm_, &normal_exr_, &albedo_exr_,
                        &colour_pfm_, &colour_exr_, &confidence_pfm_, &method_map_})
-    if (*writer) (*writer)->commit();
-  for (const auto& writer : coefficient_pfms_) writer->commit();
+    if (*writer) commit(**writer);
+  for (const auto& writer : coefficient_pfms_) commit(*writer);
 
   // The PNGs' whites, from the float maps just written, then the PNGs.
   const auto white = [&](BandQuantile& quantile, const fs::path& file, int channels) {
@@ -292,7 +312,7 @@ nlohmann::json SolveOutputWriter::finish(const SolveResult& result, const fs::pa
   const auto write_png16_of = [&](const fs::path& file, const fs::path& png, int channels, double scale) {
     const auto writer = open_png_writer(png, size_, CV_MAKETYPE(CV_16U, channels));
     read_back(file, [&](const cv::Mat& rows, int) { writer->write(png16(rows, scale)); });
-    writer->commit();
+    commit(*writer);
   };
   const double scale = white(albedo_white_, dir_ / "albedo.pfm", 1);
   write_png16_of(dir_ / "albedo.pfm", dir_ / "albedo.png", 1, scale);

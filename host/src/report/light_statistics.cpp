@@ -54,7 +54,7 @@ std::vector<LightStatistics> light_statistics(const ImageStack& stack, const Obs
   check_threshold(shadow_threshold);
   LightStatisticsTally tally(frame_files(stack), {shadow_threshold, ""});
   tally.add(observations);
-  return *recorded_light_statistics(tally.summary_json(), stack);
+  return tally.statistics(stack);
 }
 
 StatisticsThreshold statistics_threshold(const nlohmann::json& solve_parameters, std::optional<double> flag) {
@@ -103,12 +103,32 @@ void LightStatisticsTally::add(const Observations& observations) {
 void LightStatisticsTally::add(const LightStatisticsTally& other) {
   if (other.files_ != files_)
     fail("light statistics: parts of different frames ({} and {} files)", files_.size(), other.files_.size());
+  if (other.threshold_.value != threshold_.value)
+    fail("light statistics: parts counted with different shadow thresholds ({} and {})", threshold_.value,
+         other.threshold_.value);
   for (std::size_t i = 0; i < files_.size(); ++i) {
     sums_[i] += other.sums_[i];
     saturated_[i] += other.saturated_[i];
     shadow_[i] += other.shadow_[i];
   }
   pixels_ += other.pixels_;
+}
+
+std::vector<LightStatistics> LightStatisticsTally::statistics(const ImageStack& stack) const {
+  if (stack.frames.size() != files_.size())
+    fail("light statistics: {} frames in the stack, {} counted", stack.frames.size(), files_.size());
+  std::vector<LightStatistics> out;
+  const auto n = static_cast<double>(pixels_);
+  for (std::size_t i = 0; i < files_.size(); ++i) {
+    LightStatistics s = frame_statistics(stack.frames[i]);
+    if (pixels_ > 0) {
+      s.mean_value = sums_[i] / n;
+      s.saturated_share = static_cast<double>(saturated_[i]) / n;
+      s.shadow_share = static_cast<double>(shadow_[i]) / n;
+    }
+    out.push_back(s);
+  }
+  return out;
 }
 
 nlohmann::json LightStatisticsTally::summary_json() const {

@@ -100,15 +100,16 @@ void TemporaryFile::close_and_remove() {
 }
 
 void TemporaryFile::write_at(std::uint64_t offset, std::string_view bytes) {
+  if (failed_ != 0) fail_write(target_, failed_);
   if (fd_ < 0) fail("{}: cannot write: the file is already closed", target_.string());
   for (std::size_t done = 0; done < bytes.size();) {
     const ssize_t n =
         ::pwrite(fd_, bytes.data() + done, bytes.size() - done, static_cast<off_t>(offset + done));
     if (n < 0) {
       if (errno == EINTR) continue;
-      const int error = errno;
+      failed_ = errno;
       close_and_remove();
-      fail_write(target_, error);
+      fail_write(target_, failed_);
     }
     done += static_cast<std::size_t>(n);
   }
@@ -116,6 +117,7 @@ void TemporaryFile::write_at(std::uint64_t offset, std::string_view bytes) {
 }
 
 void TemporaryFile::commit() {
+  if (failed_ != 0) fail_write(target_, failed_);  // a write failed where its error could not be seen
   if (fd_ < 0) fail("{}: cannot write: the file is already closed", target_.string());
   const int closed = ::close(fd_);
   const int error = closed != 0 ? errno : 0;

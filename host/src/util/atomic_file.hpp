@@ -51,6 +51,7 @@ class TemporaryFile {
 
   std::filesystem::path target_, temporary_;
   int fd_ = -1;
+  int failed_ = 0;  // the errno of a failed write (OpenEXR swallows errors in its destructor)
   std::uint64_t end_ = 0;
 };
 

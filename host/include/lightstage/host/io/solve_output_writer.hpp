@@ -22,22 +22,22 @@
 namespace lightstage::io {
 
 // The value nth_element would put at floor(q · (n − 1)) among the finite
-// values of every band, exact: a histogram of their top 16 bits, then the
-// values of the one bucket that holds it, gathered in a second pass.
+// values of every band, exact and in constant memory: a histogram of the top
+// 16 bits of their order-keeping keys, then, in a second pass over the same
+// values, of the low 16 bits within the one bucket that holds it.
 class BandQuantile {
  public:
   void count(const float* values, std::size_t n);
   // After every count: false when there were no finite values.
   bool locate(double q);
   void gather(const float* values, std::size_t n);
-  float value();  // after gathering every band again
+  float value() const;  // after gathering every band again
 
  private:
   std::vector<std::uint64_t> histogram_ = std::vector<std::uint64_t>(1 << 16, 0);
   std::uint64_t total_ = 0;
   std::uint32_t bucket_ = 0;
   std::uint64_t rank_ = 0;  // within the bucket
-  std::vector<float> kept_;
 };
 
 class SolveOutputWriter {
@@ -78,6 +78,7 @@ class SolveOutputWriter {
       colour_pfm_, colour_exr_, confidence_pfm_, method_map_;
   std::vector<std::unique_ptr<RowWriter>> coefficient_pfms_;
   std::vector<std::string> coefficient_files_;
+  std::vector<std::filesystem::path> committed_;  // removed again if finish() fails after them
   std::vector<std::string> choices_;
   std::vector<std::size_t> choice_counts_;
 };

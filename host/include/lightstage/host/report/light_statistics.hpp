@@ -55,8 +55,10 @@ class LightStatisticsTally {
 
   // Observations of some of the mask's pixels, one column per file.
   void add(const Observations& observations);
-  // Another part of the same stack's pixels (a tile job's).
+  // Another part of the same stack's pixels (a tile job's, counted with the same threshold).
   void add(const LightStatisticsTally& other);
+  // One entry per frame of `stack` (the frames counted, in order).
+  std::vector<LightStatistics> statistics(const ImageStack& stack) const;
 
   // {"shadow_threshold", "threshold_source", "pixels", "frames": [{"file", "mean_value",
   // "saturated_share", "shadow_share"}]}
