@@ -150,8 +150,7 @@ TEST(LightStatistics, FindsTheDarkAndTheSaturatedFrame) {
 TEST(LightStatistics, PartsAddUpToTheWholeAndComeBackFromJson) {
   const ImageStack stack = sphere_stack();
   const Observations observations = make_observations(stack);
-  std::vector<std::string> files;
-  for (const Frame& frame : stack.frames) files.push_back(frame.filename);
+  const std::vector<std::string> files = report::frame_files(stack);
   report::LightStatisticsTally whole(files, {0.01, "the solver's"});
   whole.add(observations);
   // Two parts (a tile job's, read back from its part.json) count every pixel twice, with the same shares.
@@ -191,9 +190,7 @@ TEST(Report, ShowsThePerLightStatisticsTheSolveRecordedWithoutDecodingTheStack) 
   const auto result = solved_result(dir);
   nlohmann::json summary = nlohmann::json::parse(testing::read_text(result / "summary.json"));
   const ImageStack stack = sphere_stack();
-  std::vector<std::string> files;
-  for (const Frame& frame : stack.frames) files.push_back(frame.filename);
-  report::LightStatisticsTally tally(files, {0.25, "the solver's"});
+  report::LightStatisticsTally tally(report::frame_files(stack), {0.25, "the solver's"});
   tally.add(make_observations(stack));
   summary["light_statistics"] = tally.summary_json();
   summary["light_statistics"]["frames"][0]["mean_value"] = 0.7654321;  // only the solve knows this one

@@ -162,11 +162,8 @@ SolveResult BandSolver::solve_rows(int begin, int end, const ShadowThreshold& th
     const SolveResult result = solve_planned(observations, *solve_plan, /*refit_relighting=*/false);
     results.add(result, y0 - begin);
     sink(result, observations.size.height);
-    if (!light_statistics_) {
-      std::vector<std::string> files;
-      for (const Frame& frame : meta_.frames) files.push_back(frame.filename);
-      light_statistics_.emplace(std::move(files), report::statistics_threshold(result.parameters));
-    }
+    if (!light_statistics_)
+      light_statistics_.emplace(report::frame_files(meta_), report::statistics_threshold(result.parameters));
     light_statistics_->add(observations);
     if (band.ground_truth && !band.ground_truth->normals.empty()) {
       error.add(result.normals, band.ground_truth->normals, observations.mask);

@@ -84,7 +84,7 @@ SolveInput load_solve_input(const std::filesystem::path& input, const Radiometry
   }
   prepared.shadow = estimate_shadow_threshold(stack, prepared.observations);
   prepared.ground_truth = std::move(stack.ground_truth);
-  for (const Frame& frame : stack.frames) prepared.frame_files.push_back(frame.filename);
+  prepared.frame_files = report::frame_files(stack);
   prepared.response = response;
   prepared.light_model =
       set_light_model(input, stack, applied, calibration, prepared.observations, /*warn=*/true);

@@ -193,9 +193,6 @@ cv::Mat read_exr(const std::filesystem::path& path, const std::vector<std::strin
 
 void write_exr(const std::filesystem::path& path, const cv::Mat& image,
                const std::vector<std::string>& channels) {
-  if (image.empty() || image.depth() != CV_32F || (image.channels() != 1 && image.channels() != 3))
-    fail("{}: cannot write as EXR: expected CV_32FC1 or CV_32FC3, got depth code {} with {} channel(s)",
-         path.string(), image.depth(), image.channels());
   const auto writer = open_exr_writer(path, image.size(), image.type(), channels);
   writer->write(image);
   writer->commit();

@@ -164,10 +164,6 @@ std::unique_ptr<RowWriter> open_pfm_writer(const std::filesystem::path& path, cv
 }
 
 void write_pfm(const std::filesystem::path& path, const cv::Mat& image) {
-  if (image.empty() || image.depth() != CV_32F || (image.channels() != 1 && image.channels() != 3)) {
-    fail("{}: cannot write as PFM: expected CV_32FC1 or CV_32FC3, got depth code {} with {} channel(s)",
-         path.string(), image.depth(), image.channels());
-  }
   const auto writer = open_pfm_writer(path, image.size(), image.type());
   writer->write(image);
   writer->commit();

@@ -10,12 +10,6 @@ namespace {
 
 constexpr double kDefaultShadowThreshold = 0.02;
 
-std::vector<std::string> frame_files(const ImageStack& stack) {
-  std::vector<std::string> files;
-  for (const Frame& frame : stack.frames) files.push_back(frame.filename);
-  return files;
-}
-
 LightStatistics frame_statistics(const Frame& frame) {
   LightStatistics s;
   s.file = frame.filename;
@@ -32,6 +26,12 @@ void check_threshold(double shadow_threshold) {
 }
 
 }  // namespace
+
+std::vector<std::string> frame_files(const ImageStack& stack) {
+  std::vector<std::string> files;
+  for (const Frame& frame : stack.frames) files.push_back(frame.filename);
+  return files;
+}
 
 nlohmann::json LightStatistics::to_json() const {
   return {{"file", file},

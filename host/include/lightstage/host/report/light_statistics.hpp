@@ -36,6 +36,9 @@ std::vector<LightStatistics> light_statistics(const ImageStack& stack, double sh
 std::vector<LightStatistics> light_statistics(const ImageStack& stack, const Observations& observations,
                                               double shadow_threshold);
 
+// The frames' image names, in order (what a tally counts).
+std::vector<std::string> frame_files(const ImageStack& stack);
+
 // The shadow threshold the statistics use: `flag` when given, else the
 // solver's (a solve's parameters.shadow_threshold when > 0), else 0.02.
 struct StatisticsThreshold {
