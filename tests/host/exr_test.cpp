@@ -2,6 +2,7 @@
 // 3 channels, any channel order, NaN and infinities kept), the header read
 // without decoding, and errors that name the file and the problem.
 #include "lightstage/host/io/exr.hpp"
+#include "lightstage/host/io/row_reader.hpp"
 #include "lightstage/testing/errors.hpp"
 #include "lightstage/testing/paths.hpp"
 
@@ -235,6 +236,43 @@ TEST(Exr, TiledHalfUintCroppedAndSubsampledFiles) {
             }).find("y-float-subsampled.exr.bin: EXR channel 'RY' is subsampled (2x2)"),
             std::string::npos);
   EXPECT_EQ(sub.read({"Y"}).size(), cv::Size(8, 6));
+}
+
+TEST(Exr, RowBandsEqualTheWholeReadForScanLinesAndTiles) {
+  const auto dir = testing::scratch_dir();
+  const cv::Mat image = pattern(37, 11, 3);
+  write_exr(dir / "rgb.exr", image, {"B", "G", "R"});
+  write_bytes(dir / "tiled.exr",
+              read_bytes(testing::source_dir() / "tests/fuzz/corpus/exr/rgb-tiled-piz.exr.bin").substr(1));
+  for (const auto& [file, whole] :
+       {std::pair{dir / "rgb.exr", image},
+        std::pair{dir / "tiled.exr", read_exr(dir / "tiled.exr", {"B", "G", "R"})}}) {
+    const auto rows = open_exr_rows(file, {"B", "G", "R"});
+    ASSERT_EQ(rows->size(), whole.size());
+    cv::Mat band;
+    for (const int height : {1, 4, 16}) {
+      // Top to bottom, then a band above the last one read.
+      for (int y = 0; y < whole.rows; y += height) {
+        const int n = std::min(height, whole.rows - y);
+        rows->read(y, n, band);
+        expect_same(band, whole.rowRange(y, y + n));
+      }
+      rows->read(1, 2, band);
+      expect_same(band, whole.rowRange(1, 3));
+    }
+  }
+  EXPECT_NE(error_of([&] { open_exr_rows(dir / "rgb.exr", {"Y"}); }).find("rgb.exr: EXR has no channel 'Y'"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { open_exr_rows(dir / "none.exr", {"Y"}); }).find("none.exr: no such file"),
+            std::string::npos);
+  // Cut short: found as the reader is opened or as its rows are decoded, naming the file.
+  const std::string bytes = read_bytes(dir / "rgb.exr");
+  write_bytes(dir / "short.exr", bytes.substr(0, bytes.size() * 2 / 3));
+  EXPECT_NE(error_of([&] {
+              cv::Mat rows_read;
+              open_exr_rows(dir / "short.exr", {"R"})->read(0, 37, rows_read);
+            }).find("short.exr"),
+            std::string::npos);
 }
 
 TEST(Exr, HugeDimensionsAreRefusedFromTheHeader) {

@@ -1,4 +1,5 @@
 #include "lightstage/host/io/solve_output.hpp"
+#include "lightstage/host/io/solve_folder_rows.hpp"
 #include "lightstage/host/io/solve_output_writer.hpp"
 
 #include "lightstage/common/error.hpp"
@@ -333,6 +334,51 @@ TEST(SolveOutputWriter, AFinishThatFailsHalfWayTakesBackTheFilesItHadWritten) {
                 ::testing::HasSubstr("albedo.png: cannot write: no space left on the device"));
   }
   EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+TEST(SolveFolderRows, BandsReadBackWhatTheWholeReadGives) {
+  const cv::Size size(19, 31);
+  const fs::path dir = lightstage::testing::scratch_dir() / "result";
+  SolveResult result = full_result(size);
+  // Order 1 has four terms (the writer's own tests write three, which it does not check).
+  std::vector<cv::Mat> planes;
+  cv::split(result.coefficients, planes);
+  planes.push_back(planes[1] * 0.5);
+  cv::merge(planes, result.coefficients);
+  result.reflectance["terms"] = {"1", "x", "y", "xy"};
+  io::write_solve_outputs(dir, result, "/in");
+  const io::SolveFolder whole = io::read_solve_folder(dir);
+  ASSERT_FALSE(whole.chroma.empty());
+  ASSERT_FALSE(whole.coefficients.empty());
+  io::SolveFolderRows rows(dir);
+  EXPECT_EQ(rows.size(), size);
+  EXPECT_TRUE(rows.has_albedo() && rows.has_chroma() && rows.has_residual() && rows.has_confidence());
+  EXPECT_EQ(rows.facts().summary, whole.summary);
+  EXPECT_EQ(rows.facts().reflectance_order, 1);
+  EXPECT_TRUE(rows.facts().normals.empty()) << "the facts hold no map";
+  const auto same = [](const cv::Mat& a, const cv::Mat& b, const char* what) {
+    ASSERT_EQ(a.type(), b.type()) << what;
+    ASSERT_EQ(a.size(), b.size()) << what;
+    EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0) << what;
+  };
+  for (int y = 0; y < size.height; y += 6) {
+    const int n = std::min(6, size.height - y);
+    const io::SolveFolder band = rows.read(y, n);
+    const cv::Range r(y, y + n);
+    same(band.normals, whole.normals.rowRange(r), "normals");
+    same(band.solved, whole.solved.rowRange(r), "solved");
+    same(band.albedo, whole.albedo.rowRange(r), "albedo");
+    same(band.chroma, whole.chroma.rowRange(r), "chroma");
+    same(band.residual, whole.residual.rowRange(r), "residual");
+    same(band.confidence, whole.confidence.rowRange(r), "confidence");
+    same(band.coefficients, whole.coefficients.rowRange(r), "coefficients");
+    EXPECT_EQ(band.albedo_rgb_png_scale, whole.albedo_rgb_png_scale);
+  }
+  // The normals are the float ones of normal.exr, not normal.png's 16-bit code.
+  const cv::Mat solved_rows = whole.normals.rowRange(6, 13);
+  cv::Mat exact;
+  result.normals.rowRange(6, 13).copyTo(exact);
+  EXPECT_LT(cv::norm(solved_rows, exact, cv::NORM_INF), 1e-6);
 }
 
 TEST(BandQuantile, EqualsNthElementOverEveryValueWhateverTheirSign) {

@@ -1,6 +1,7 @@
 #include "lightstage/host/io/exr.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/host/io/row_reader.hpp"
 #include "lightstage/host/io/row_writer.hpp"
 
 #include <OpenEXR/ImfChannelList.h>
@@ -74,6 +75,95 @@ std::string read_whole_file(const std::filesystem::path& path) {
   return bytes;
 }
 
+// What a parsed header says, within the limits above.
+ExrHeader describe(const Imf::Header& header, bool tiled, const std::string& name) {
+  ExrHeader out;
+  const Imath::Box2i data = header.dataWindow();
+  const std::int64_t width = std::int64_t{data.max.x} - data.min.x + 1;
+  const std::int64_t height = std::int64_t{data.max.y} - data.min.y + 1;
+  if (width < 1 || height < 1 || width > kExrMaxSide || height > kExrMaxSide ||
+      width * height > kExrMaxPixels)
+    fail("{}: EXR image is {}x{}; at most {} pixels, {} a side, are read", name, width, height, kExrMaxPixels,
+         kExrMaxSide);
+  out.size = cv::Size(static_cast<int>(width), static_cast<int>(height));
+  out.cropped = data != header.displayWindow();
+  out.tiled = tiled;
+  if (tiled) {
+    // OpenEXR sizes its tile-offset tables from the header: bound the tile count too.
+    const Imf::TileDescription& tiles = header.tileDescription();
+    const std::int64_t count =
+        ((width + tiles.xSize - 1) / tiles.xSize) * ((height + tiles.ySize - 1) / tiles.ySize);
+    if (count > (std::int64_t{1} << 20))
+      fail("{}: EXR tiles of {}x{} make {} tiles for a {}x{} image; use larger tiles or scan lines", name,
+           tiles.xSize, tiles.ySize, count, width, height);
+  }
+  for (auto it = header.channels().begin(); it != header.channels().end(); ++it)
+    out.channels.push_back(
+        {it.name(), pixel_type(it.channel().type), it.channel().xSampling, it.channel().ySampling});
+  return out;
+}
+
+// The channels asked for (1 to 4) are there once each, a value per pixel, in a whole frame.
+void check_channels(const ExrHeader& header, const std::string& name,
+                    const std::vector<std::string>& channels) {
+  if (channels.empty() || channels.size() > 4)
+    fail("{}: cannot read {} EXR channels at once (1 to 4)", name, channels.size());
+  std::vector<std::string> present;
+  for (const auto& channel : header.channels) present.push_back(channel.name);
+  std::set<std::string> seen;
+  for (const auto& wanted : channels) {
+    if (!seen.insert(wanted).second) fail("{}: EXR channel '{}' asked for twice", name, wanted);
+    const auto it = std::find_if(header.channels.begin(), header.channels.end(),
+                                 [&](const ExrChannel& channel) { return channel.name == wanted; });
+    if (it == header.channels.end())
+      fail("{}: EXR has no channel '{}' (it has {})", name, wanted,
+           present.empty() ? std::string("none") : quoted_list(present));
+    if (it->x_sampling != 1 || it->y_sampling != 1)
+      fail("{}: EXR channel '{}' is subsampled ({}x{}); a value per pixel is needed", name, wanted,
+           it->x_sampling, it->y_sampling);
+  }
+  if (header.cropped)
+    fail("{}: EXR data window differs from the display window (a cropped image); write the whole frame",
+         name);
+}
+
+// A frame buffer putting `channels` of the data window's rows from `first_row` into `out` (CV_32FC(n)).
+Imf::FrameBuffer float_slices(const std::vector<std::string>& channels, const Imath::Box2i& data,
+                              int first_row, cv::Mat& out) {
+  Imath::Box2i window = data;
+  window.min.y = data.min.y + first_row;
+  Imf::FrameBuffer frame;
+  const auto n = channels.size();
+  for (std::size_t i = 0; i < n; ++i)
+    frame.insert(channels[i],
+                 Imf::Slice::Make(Imf::FLOAT, out.ptr<float>() + i, window, sizeof(float) * n, out.step[0]));
+  return frame;
+}
+
+// Rows decoded from the file on disk as they are asked for (OpenEXR keeps its own buffers).
+class ExrRows final : public RowReader {
+ public:
+  ExrRows(const std::filesystem::path& path, std::unique_ptr<Imf::InputFile> file, cv::Size size,
+          std::vector<std::string> channels)
+      : RowReader(path, size, CV_MAKETYPE(CV_32F, static_cast<int>(channels.size()))),
+        file_(std::move(file)),
+        channels_(std::move(channels)) {}
+
+ private:
+  void read_rows(int y0, int rows, cv::Mat& out) override {
+    try {
+      const Imath::Box2i& data = file_->header().dataWindow();
+      file_->setFrameBuffer(float_slices(channels_, data, y0, out));
+      file_->readPixels(data.min.y + y0, data.min.y + y0 + rows - 1);
+    } catch (const std::exception& e) {
+      fail("{}: cannot decode EXR rows {} to {}: {}", path().string(), y0, y0 + rows - 1, e.what());
+    }
+  }
+
+  std::unique_ptr<Imf::InputFile> file_;
+  std::vector<std::string> channels_;
+};
+
 }  // namespace
 
 const char* to_string(ExrPixelType type) {
@@ -120,50 +210,11 @@ void ExrFile::parse_header() {
     if (in.ran_out) fail("{}: EXR header ends inside the file (truncated file)", name_);
     fail("{}: EXR header: {}", name_, e.what());
   }
-  const Imath::Box2i data = header.dataWindow();
-  const std::int64_t width = std::int64_t{data.max.x} - data.min.x + 1;
-  const std::int64_t height = std::int64_t{data.max.y} - data.min.y + 1;
-  if (width < 1 || height < 1 || width > kExrMaxSide || height > kExrMaxSide ||
-      width * height > kExrMaxPixels)
-    fail("{}: EXR image is {}x{}; at most {} pixels, {} a side, are read", name_, width, height,
-         kExrMaxPixels, kExrMaxSide);
-  header_.size = cv::Size(static_cast<int>(width), static_cast<int>(height));
-  header_.cropped = data != header.displayWindow();
-  header_.tiled = Imf::isTiled(version);
-  if (header_.tiled) {
-    // OpenEXR sizes its tile-offset tables from the header: bound the tile count too.
-    const Imf::TileDescription& tiles = header.tileDescription();
-    const std::int64_t count =
-        ((width + tiles.xSize - 1) / tiles.xSize) * ((height + tiles.ySize - 1) / tiles.ySize);
-    if (count > (std::int64_t{1} << 20))
-      fail("{}: EXR tiles of {}x{} make {} tiles for a {}x{} image; use larger tiles or scan lines", name_,
-           tiles.xSize, tiles.ySize, count, width, height);
-  }
-  for (auto it = header.channels().begin(); it != header.channels().end(); ++it)
-    header_.channels.push_back(
-        {it.name(), pixel_type(it.channel().type), it.channel().xSampling, it.channel().ySampling});
+  header_ = describe(header, Imf::isTiled(version), name_);
 }
 
 cv::Mat ExrFile::read(const std::vector<std::string>& channels) const {
-  if (channels.empty() || channels.size() > 4)
-    fail("{}: cannot read {} EXR channels at once (1 to 4)", name_, channels.size());
-  std::vector<std::string> present;
-  for (const auto& channel : header_.channels) present.push_back(channel.name);
-  std::set<std::string> seen;
-  for (const auto& name : channels) {
-    if (!seen.insert(name).second) fail("{}: EXR channel '{}' asked for twice", name_, name);
-    const auto it = std::find_if(header_.channels.begin(), header_.channels.end(),
-                                 [&](const ExrChannel& channel) { return channel.name == name; });
-    if (it == header_.channels.end())
-      fail("{}: EXR has no channel '{}' (it has {})", name_, name,
-           present.empty() ? std::string("none") : quoted_list(present));
-    if (it->x_sampling != 1 || it->y_sampling != 1)
-      fail("{}: EXR channel '{}' is subsampled ({}x{}); a value per pixel is needed", name_, name,
-           it->x_sampling, it->y_sampling);
-  }
-  if (header_.cropped)
-    fail("{}: EXR data window differs from the display window (a cropped image); write the whole frame",
-         name_);
+  check_channels(header_, name_, channels);
 
   const int n = static_cast<int>(channels.size());
   cv::Mat image(header_.size, CV_MAKETYPE(CV_32F, n));
@@ -172,13 +223,8 @@ cv::Mat ExrFile::read(const std::vector<std::string>& channels) const {
   try {
     in.seekg(0);
     Imf::InputFile file(in);
-    Imf::FrameBuffer frame;
     const Imath::Box2i& data = file.header().dataWindow();
-    for (int i = 0; i < n; ++i)
-      frame.insert(channels[static_cast<std::size_t>(i)],
-                   Imf::Slice::Make(Imf::FLOAT, image.ptr<float>() + i, data,
-                                    sizeof(float) * static_cast<std::size_t>(n), image.step[0]));
-    file.setFrameBuffer(frame);
+    file.setFrameBuffer(float_slices(channels, data, 0, image));
     file.readPixels(data.min.y, data.max.y);
   } catch (const std::exception& e) {
     fail("{}: cannot decode EXR channel{} {}: {}{}", name_, n == 1 ? "" : "s", quoted_list(channels),
@@ -189,6 +235,25 @@ cv::Mat ExrFile::read(const std::vector<std::string>& channels) const {
 
 cv::Mat read_exr(const std::filesystem::path& path, const std::vector<std::string>& channels) {
   return ExrFile(path).read(channels);
+}
+
+std::unique_ptr<RowReader> open_exr_rows(const std::filesystem::path& path,
+                                         const std::vector<std::string>& channels) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) fail("{}: no such file", path.string());
+  std::unique_ptr<Imf::InputFile> file;
+  ExrHeader header;
+  try {
+    file = std::make_unique<Imf::InputFile>(path.c_str());
+    if (!file->isComplete()) fail("{}: EXR ends before its last scan line (truncated file)", path.string());
+    header = describe(file->header(), file->header().hasTileDescription(), path.string());
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    fail("{}: EXR header: {}", path.string(), e.what());
+  }
+  check_channels(header, path.string(), channels);
+  return std::make_unique<ExrRows>(path, std::move(file), header.size, channels);
 }
 
 void write_exr(const std::filesystem::path& path, const cv::Mat& image,

@@ -74,6 +74,14 @@ class ExrFile {
 // ExrFile(path).read(channels).
 cv::Mat read_exr(const std::filesystem::path& path, const std::vector<std::string>& channels);
 
+class RowReader;
+// The named channels read a band of rows at a time (row_reader.hpp), decoded
+// from the file on disk as the rows are asked for: never held whole. The same
+// checks and errors as ExrFile::read; a file that does not decode at some rows
+// is found when they are read.
+std::unique_ptr<RowReader> open_exr_rows(const std::filesystem::path& path,
+                                         const std::vector<std::string>& channels);
+
 // Writes CV_32FC1 or CV_32FC3 as 32-bit FLOAT channels with ZIP compression,
 // atomically (a temporary file beside it, then a rename); channel i of the
 // image is named channels[i]. Throws InputError naming the file for another
