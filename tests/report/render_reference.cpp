@@ -23,8 +23,8 @@ int main(int argc, char** argv) {
   try {
     const std::filesystem::path result = argv[1];
     std::vector<std::string> notes;
-    const auto model =
-        lightstage::report::load_surface_model(lightstage::io::read_solve_folder(result), 1 << 30, notes);
+    lightstage::io::SolveFolderRows folder(result);
+    const auto model = lightstage::report::load_surface_model(folder, 1 << 30, notes);
     const lightstage::Vec3 light(std::stod(argv[2]), std::stod(argv[3]), std::stod(argv[4]));
     lightstage::io::write_pfm(argv[5], model.chroma.empty()
                                            ? lightstage::report::relight(model, light)

@@ -17,6 +17,7 @@
 #include <gtest/gtest.h>
 #include <zlib.h>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -248,7 +249,8 @@ TEST(ViewerData, PayloadCarriesTheResultFiles) {
   const auto result = solved_result(dir);
   std::vector<std::string> notes;
   const nlohmann::json summary = nlohmann::json::parse(testing::read_text(result / "summary.json"));
-  const auto model = report::load_surface_model(io::read_solve_folder(result), 1 << 20, notes);
+  io::SolveFolderRows folder(result);
+  const auto model = report::load_surface_model(folder, 1 << 20, notes);
   EXPECT_EQ(model.stride, 1);
   EXPECT_EQ(model.kind, report::ShadingKind::kLambertian);
   EXPECT_DOUBLE_EQ(model.display_scale, summary["albedo_png_scale"].get<double>());
@@ -385,6 +387,100 @@ TEST(Report, LargeResultsAreSubsampledForTheViewer) {
       between(html, "<script type=\"application/json\" id=\"lightstage-viewer-meta\">", "</script>"));
   EXPECT_EQ(meta["stride"], 2);
   EXPECT_EQ(meta["width"], 16);
+}
+
+// The page without the line that says when it was made.
+std::string without_time(std::string html) {
+  const auto at = html.find("report by lightstage");
+  if (at != std::string::npos) html.erase(at, html.find("</p>", at) - at);
+  return html;
+}
+
+// The picture of the <img> whose alt text is `alt`, decoded from its data URI.
+cv::Mat picture(const std::string& html, const std::string& alt) {
+  const auto end = html.find("\" alt=\"" + alt + "\"");
+  const auto start = html.rfind("base64,", end) + 7;
+  const auto bytes = decode_base64(html.substr(start, end - start));
+  return cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+}
+
+// The sphere's solve with every map the report draws: depth, confidence, a choice per pixel.
+fs::path result_with_every_map(const fs::path& dir) {
+  const ImageStack stack = sphere_stack();
+  io::write_stack(dir / "stack", stack);
+  L2Options options;
+  options.shadow_threshold = 0.01;
+  SolveResult result = solve_lambertian(make_observations(stack), options);
+  result.confidence = cv::Mat(result.normals.size(), CV_32FC1, cv::Scalar(0));
+  result.choice = cv::Mat(result.normals.size(), CV_8UC1, cv::Scalar(0));
+  result.choices = {"l2", "robust"};
+  cv::Mat depth(kSize, kSize, CV_32FC1, cv::Scalar(0));
+  for (int y = 0; y < kSize; ++y) {
+    for (int x = 0; x < kSize; ++x) {
+      depth.at<float>(y, x) = static_cast<float>(std::sin(0.3 * x) * std::cos(0.2 * y) + 2);
+      if (result.solved.at<std::uint8_t>(y, x) == 0) continue;
+      result.confidence.at<float>(y, x) = static_cast<float>((x * 7 + y * 3) % 11) / 10.0f;
+      result.choice.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(1 + (x / 4 + y / 5) % 2);
+    }
+  }
+  io::write_solve_outputs(dir / "result", result, dir / "stack");
+  io::write_pfm(dir / "result" / "depth.pfm", depth);
+  return dir / "result";
+}
+
+TEST(Report, BandsOfAFewRowsDrawTheSamePageAsTheWholeResult) {
+  const auto dir = testing::scratch_dir();
+  const auto result = result_with_every_map(dir);
+  report::ReportOptions options;
+  options.band_rows = kSize;
+  report::ReportSummary whole_summary;
+  const std::string whole = without_time(report::render_report(result, options, &whole_summary));
+  const std::vector<std::string> expected = {"viewer",           "surface",  "depth", "lights",
+                                             "light-statistics", "residual", "error"};
+  EXPECT_EQ(whole_summary.sections, expected) << "every map drawn, nothing to note";
+  EXPECT_NE(whole.find("alt=\"method per pixel\""), std::string::npos);
+  EXPECT_NE(whole.find("alt=\"confidence (0.5"), std::string::npos);
+  for (const int rows : {1, 5, 13}) {
+    options.band_rows = rows;
+    EXPECT_EQ(without_time(report::render_report(result, options)), whole) << rows << " rows a band";
+  }
+}
+
+TEST(Report, PicturesOfAResultOverTheBudgetAreBlockMeansOfTheFullPictures) {
+  const auto dir = testing::scratch_dir();
+  const auto result = result_with_every_map(dir);
+  const std::string full = report::render_report(result);
+  report::ReportOptions options;
+  options.picture_max_pixels = 300;  // 32×32 = 1024 pixels → blocks of 2×2
+  options.band_rows = 3;             // bands that split the blocks
+  report::ReportSummary summary;
+  const std::string small = report::render_report(result, options, &summary);
+  bool noted = false;
+  for (const auto& note : summary.notes) noted |= note.find("at 1/2 of its size") != std::string::npos;
+  EXPECT_TRUE(noted);
+  for (const std::string alt : {"normal map", "albedo", "shaded depth", "angular error map"}) {
+    const cv::Mat big = picture(full, alt), overview = picture(small, alt);
+    ASSERT_EQ(big.size(), cv::Size(kSize, kSize)) << alt;
+    ASSERT_EQ(overview.size(), cv::Size(kSize / 2, kSize / 2)) << alt;
+    ASSERT_EQ(overview.type(), CV_8UC4) << alt;
+    for (int y = 0; y < overview.rows; ++y) {
+      for (int x = 0; x < overview.cols; ++x) {
+        cv::Vec4d sum(0, 0, 0, 0);
+        for (int dy = 0; dy < 2; ++dy) {
+          for (int dx = 0; dx < 2; ++dx) {
+            const auto p = big.at<cv::Vec4b>(2 * y + dy, 2 * x + dx);
+            if (p[3] == 0) continue;
+            sum += cv::Vec4d(p[0], p[1], p[2], 1);
+          }
+        }
+        const auto o = overview.at<cv::Vec4b>(y, x);
+        ASSERT_EQ(o[3], std::lround(255 * sum[3] / 4)) << alt << " at " << x << "," << y;
+        if (sum[3] == 0) continue;
+        for (int c = 0; c < 3; ++c)
+          ASSERT_EQ(o[c], std::lround(sum[c] / sum[3])) << alt << " at " << x << "," << y;
+      }
+    }
+  }
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
 #include "lightstage/host/io/output_folder.hpp"
+#include "lightstage/host/report/report.hpp"
 #include "lightstage/pipeline/memory_budget.hpp"
 
 #include <fmt/format.h>
@@ -25,8 +26,6 @@ constexpr std::size_t kMapBytes = 12 + 4 + 4 + 1 + 4 + 4 + 12 + 1;
 // Held for the whole image while bands are solved: the stack's and the region's masks, the background
 // sample, the solved map the output writer keeps, the angular error of each pixel against ground truth.
 constexpr std::size_t kHeldBytes = 16;
-// The report, made after the solve from the result's maps read whole (77 bytes a pixel measured at 4 Mpx).
-constexpr std::size_t kReportBytes = 100;
 constexpr std::size_t kUnknownPixelBytes = 12;  // float RGB, the most a frame pixel takes
 // The program itself before it reads a stack: code, libraries, allocator (65-78 MB measured for
 // `lightstage`).
@@ -57,7 +56,7 @@ BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit) {
   plan.row_bytes = decoded + width * (kObservationBytes * images + kPixelBytes + kMapBytes);
   // The program and what is held for the whole image; the output maps go to their files band by band.
   plan.fixed_bytes = kProcessBytes + pixels * kHeldBytes;
-  plan.report_bytes = kProcessBytes + pixels * kReportBytes;
+  plan.report_bytes = kProcessBytes + report::report_memory_bytes(size.width, size.height);
   plan.whole_bytes =
       std::max(plan.fixed_bytes + plan.row_bytes * static_cast<std::size_t>(size.height), plan.report_bytes);
   if (plan.whole_bytes <= memory_limit) {
@@ -91,9 +90,8 @@ SolveReport solve_folder_in_bands(const std::filesystem::path& input, const Solv
   logger("host")->info("{}: {} to solve whole; solving in {} bands of {} rows", input.string(),
                        describe_bytes(plan.whole_bytes), plan.bands, plan.band_rows);
   if (plan.report_bytes > plan.limit_bytes)
-    logger("host")->warn(
-        "{}: the report reads the result's maps whole and will take about {}, over --memory-limit {}",
-        input.string(), describe_bytes(plan.report_bytes), describe_bytes(plan.limit_bytes));
+    logger("host")->warn("{}: the report will take about {}, over --memory-limit {}", input.string(),
+                         describe_bytes(plan.report_bytes), describe_bytes(plan.limit_bytes));
   const ShadowThreshold threshold = solver.shadow_threshold();
   AngularErrorAccumulator error;
   bool ground_truth = false;

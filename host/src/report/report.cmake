@@ -23,6 +23,8 @@ add_custom_command(
 target_sources(lightstage_host PRIVATE
   src/report/html.cpp
   src/report/maps.cpp
+  src/report/overview.cpp
+  src/report/result_maps.cpp
   src/report/svg.cpp
   src/report/light_statistics.cpp
   src/report/viewer_data.cpp

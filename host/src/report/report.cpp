@@ -9,12 +9,15 @@
 #include "lightstage/host/io/mask.hpp"
 #include "lightstage/host/io/normal_map.hpp"
 #include "lightstage/host/io/pfm.hpp"
+#include "lightstage/host/io/row_reader.hpp"
+#include "lightstage/host/io/solve_folder_rows.hpp"
 #include "lightstage/host/io/stack_io.hpp"
 #include "lightstage/host/reflectance/bipolynomial_model.hpp"
 #include "lightstage/host/report/light_statistics.hpp"
 #include "lightstage/host/report/viewer_data.hpp"
 #include "report/html.hpp"
 #include "report/maps.hpp"
+#include "report/result_maps.hpp"
 #include "report/svg.hpp"
 #include "report_web_assets.hpp"
 #include "util/atomic_file.hpp"
@@ -79,7 +82,8 @@ struct Inputs {
   fs::path result_dir;
   nlohmann::json summary = nlohmann::json::object();
   std::optional<fs::path> stack_dir;
-  std::optional<ImageStack> stack;
+  std::optional<ImageStack> stack;  // without ground truth
+  bool stack_has_truth = false;
   std::optional<calibration::LightCalibration> calibration;
   std::optional<fs::path> calibration_file;
   std::vector<std::string> notes;
@@ -119,11 +123,7 @@ void cut_to_crop(ImageStack& stack, const nlohmann::json& crop) {
     cut(frame.image, "frames");
     cut(frame.dark, "dark frames");
   }
-  cut(stack.mask, "mask");
-  if (stack.ground_truth) {
-    cut(stack.ground_truth->normals, "ground truth");
-    cut(stack.ground_truth->depth, "ground-truth depth");
-  }
+  cut(stack.mask, "mask");  // the ground truth is read a band at a time, cut as it is read
 }
 
 void load_inputs(Inputs& in, const io::SolveFolder& folder, const ReportOptions& options) {
@@ -156,8 +156,10 @@ void load_inputs(Inputs& in, const io::SolveFolder& folder, const ReportOptions&
     // Only statistics the solve did not record need the frames' pixels.
     load.frame_pixels = options.light_statistics &&
                         (options.shadow_threshold.has_value() || !in.summary.contains("light_statistics"));
+    load.load_ground_truth = false;  // read a band at a time (result_maps.hpp)
     try {
       in.stack = io::load_stack(*in.stack_dir, load);
+      in.stack_has_truth = fs::exists(*in.stack_dir / "Normal_gt.png");
       if (const auto crop = in.summary.find("crop"); crop != in.summary.end()) cut_to_crop(*in.stack, *crop);
     } catch (const InputError& e) {
       if (options.stack) throw;
@@ -258,65 +260,57 @@ std::string viewer_section(const SurfaceModel& model, const Inputs& in) {
   return html;
 }
 
-// `albedo`: grey, or colour (BGR) for a colour stack's result; `grey_albedo` sets the scale.
-std::string surface_section(const Inputs& in, const io::DecodedNormals& normals, const cv::Mat& albedo,
-                            const cv::Mat& grey_albedo) {
+std::string surface_section(const ResultPictures& pictures) {
   std::string html = "<div class=\"row\">\n";
   html +=
-      figure(png_data_uri(normal_colours(normals.normals, normals.valid)), "normal map",
+      figure(png_data_uri(pictures.normals), "normal map",
              "Normals, colour = (n + 1) / 2: red = x (right), green = y (up), blue = z (toward the camera).");
   html +=
       figure(png_data_uri(normal_sphere_legend(160)), "reference sphere",
              "Reference: a sphere's normals in the same code (the light toward the camera is the centre).",
              "legend");
-  const double scale =
-      in.summary.value(albedo.channels() == 3 ? "albedo_rgb_png_scale" : "albedo_png_scale", 0.0);
-  const double shown = scale > 0 ? scale : std::max(quantile(grey_albedo, normals.valid, 0.995), 1e-12);
-  html +=
-      figure(png_data_uri(grey(albedo, normals.valid, shown)), "albedo",
-             fmt::format("{}, white at {} (99.5th percentile of the solved albedo).",
-                         albedo.channels() == 3 ? "Colour albedo (linear)" : "Albedo", format_number(shown)));
+  html += figure(png_data_uri(pictures.albedo), "albedo",
+                 fmt::format("{}, white at {} (99.5th percentile of the solved albedo).",
+                             pictures.colour_albedo ? "Colour albedo (linear)" : "Albedo",
+                             format_number(pictures.albedo_shown)));
   html += "</div>\n";
   return html;
 }
 
-std::string depth_section(const cv::Mat& depth, const cv::Mat& valid, const fs::path& surface_dir,
-                          int index) {
-  cv::Mat usable = valid.clone();
-  for (int y = 0; y < depth.rows; ++y)
-    for (int x = 0; x < depth.cols; ++x)
-      if (!std::isfinite(depth.at<float>(y, x)) || depth.at<float>(y, x) == 0)
-        usable.at<std::uint8_t>(y, x) = 0;
-  // The integration's camera (surface.json beside depth.pfm): the depth unit per pixel.
-  double pixel_size = 1.0;
-  bool perspective = false;
+// How depth.pfm's values read: the integration's camera (surface.json beside it).
+struct DepthUnit {
   std::string unit = "depth units";
-  if (fs::exists(surface_dir / "surface.json")) {
-    const auto surface = read_json_file(surface_dir / "surface.json");
-    const auto camera = surface.value("camera", nlohmann::json::object());
-    if (camera.is_object() && camera.value("model", "") == "orthographic") {
-      pixel_size = camera.value("pixel_size", 1.0);
-      unit = pixel_size == 1.0 ? "pixels" : "mm";
-    } else if (camera.is_object() && camera.contains("K") && camera["K"].is_array() &&
-               camera["K"].size() == 9) {
-      // Perspective: a pixel spans depth / fx at the typical depth.
-      const double fx = camera["K"][0].is_number() ? camera["K"][0].get<double>() : 0.0;
-      const double d = quantile(depth, usable, 0.5);
-      if (fx > 0 && d > 0) pixel_size = d / fx;
-      unit = "mm along the optical axis";
-      perspective = true;
-    }
+  bool perspective = false;
+};
+
+DepthUnit depth_camera(const fs::path& surface_dir, DepthSource& source) {
+  DepthUnit unit;
+  if (!fs::exists(surface_dir / "surface.json")) return unit;
+  const auto surface = read_json_file(surface_dir / "surface.json");
+  const auto camera = surface.value("camera", nlohmann::json::object());
+  if (camera.is_object() && camera.value("model", "") == "orthographic") {
+    source.pixel_size = camera.value("pixel_size", 1.0);
+    unit.unit = source.pixel_size == 1.0 ? "pixels" : "mm";
+  } else if (camera.is_object() && camera.contains("K") && camera["K"].is_array() &&
+             camera["K"].size() == 9) {
+    // Perspective: a pixel spans depth / fx at the typical depth.
+    source.focal_px = camera["K"][0].is_number() ? camera["K"][0].get<double>() : 0.0;
+    unit.unit = "mm along the optical axis";
+    unit.perspective = true;
   }
-  const double low = quantile(depth, usable, 0.0), high = quantile(depth, usable, 1.0);
+  return unit;
+}
+
+std::string depth_section(const DepthPictures& depth, const DepthUnit& unit, int index) {
   std::string html = "<div class=\"row\">\n";
-  html += figure(png_data_uri(shaded_depth(depth, usable, pixel_size)), "shaded depth",
+  html += figure(png_data_uri(depth.shaded), "shaded depth",
                  fmt::format("depth.pfm as a relief lit from the upper left ({} {} per pixel).",
-                             format_number(pixel_size), unit));
-  html += "<figure>" + std::string("<img class=\"map\" src=\"") +
-          png_data_uri(false_colour(depth, usable, low, high, kDepthColormap)) + "\" alt=\"depth\">" +
-          colour_bar_svg(kDepthColormap, low, high,
-                         fmt::format("depth ({}; {})", unit,
-                                     perspective ? "larger = farther" : "larger = nearer the camera"),
+                             format_number(depth.pixel_size), unit.unit));
+  html += "<figure>" + std::string("<img class=\"map\" src=\"") + png_data_uri(depth.colour) +
+          "\" alt=\"depth\">" +
+          colour_bar_svg(kDepthColormap, depth.low, depth.high,
+                         fmt::format("depth ({}; {})", unit.unit,
+                                     unit.perspective ? "larger = farther" : "larger = nearer the camera"),
                          fmt::format("bar-{}", index)) +
           "</figure>\n</div>\n";
   return html;
@@ -471,83 +465,62 @@ std::string light_statistics_section(const Inputs& in, const ReportOptions& opti
   return html;
 }
 
-std::string residual_section(const Inputs& in, const cv::Mat& valid, std::vector<std::string>& notes) {
+std::string map_figure(const cv::Mat& picture, double high, const std::string& what,
+                       const std::string& caption, int index) {
+  return "<figure><img class=\"map\" src=\"" + png_data_uri(picture) + "\" alt=\"" + escape_html(what) +
+         "\">" + colour_bar_svg(kMagnitudeColormap, 0, high, what, fmt::format("bar-{}", index)) +
+         "<figcaption>" + escape_html(caption) + "</figcaption></figure>\n";
+}
+
+std::string residual_section(const Inputs& in, const ResultPictures& pictures) {
   std::string html = "<div class=\"row\">\n";
   bool any = false;
-  const auto map_figure = [&](const fs::path& file, const std::string& what, const std::string& caption,
-                              std::optional<double> fixed_high, int index) {
-    if (!fs::exists(file)) return;
-    const cv::Mat values = io::read_pfm(file);
-    if (values.type() != CV_32FC1 || values.size() != valid.size()) {
-      notes.push_back(
-          fmt::format("{}: not a one-channel float map of the result's size; not shown.", file.string()));
-      return;
-    }
-    const double high = fixed_high ? *fixed_high : nice_ceiling(quantile(values, valid, 0.99));
-    html += "<figure><img class=\"map\" src=\"" +
-            png_data_uri(false_colour(values, valid, 0, high, kMagnitudeColormap)) + "\" alt=\"" +
-            escape_html(what) + "\">" +
-            colour_bar_svg(kMagnitudeColormap, 0, high, what, fmt::format("bar-{}", index)) + "<figcaption>" +
-            escape_html(caption) + "</figcaption></figure>\n";
+  if (!pictures.residual.empty()) {
+    html +=
+        map_figure(pictures.residual, pictures.residual_high, "RMS residual of the fit",
+                   "residual.pfm: each pixel's RMS misfit over the observations it used (colour clipped at "
+                   "the 99th percentile, rounded up).",
+                   1);
     any = true;
-  };
-  map_figure(
-      in.result_dir / "residual.pfm", "RMS residual of the fit",
-      "residual.pfm: each pixel's RMS misfit over the observations it used (colour clipped at the 99th "
-      "percentile, rounded up).",
-      std::nullopt, 1);
-  map_figure(in.result_dir / "confidence.pfm", "confidence (0.5 = predicted error of 1 degree)",
-             "confidence.pfm: c = 1 / (1 + e / 1 deg), e the normal's error predicted from the lit lights' "
-             "geometry and the fit's residual; e = 1/c - 1 degrees.",
-             1.0, 2);
+  }
+  if (!pictures.confidence.empty()) {
+    html += map_figure(pictures.confidence, 1.0, "confidence (0.5 = predicted error of 1 degree)",
+                       "confidence.pfm: c = 1 / (1 + e / 1 deg), e the normal's error predicted from the lit "
+                       "lights' geometry and the fit's residual; e = 1/c - 1 degrees.",
+                       2);
+    any = true;
+  }
   // auto's per-pixel choices, with the legend and counts the solve recorded.
-  const auto method_map = in.summary.find("method_map");
-  if (method_map != in.summary.end() && method_map->is_object() &&
-      fs::exists(in.result_dir / "method_map.png")) {
-    cv::Mat picture;
-    try {
-      picture = io::read_image(in.result_dir / "method_map.png");
-    } catch (const InputError&) {
+  if (!pictures.method_map.empty()) {
+    std::string legend;
+    for (const auto& choice : in.summary["method_map"].value("choices", nlohmann::json::array())) {
+      if (!choice.is_object()) continue;
+      legend += fmt::format("<span class=\"swatch\" style=\"background:{}\"></span>{} ({} px) ",
+                            escape_html(choice.value("colour", "#000000")),
+                            escape_html(choice.value("method", "?")), choice.value("pixels", 0));
     }
-    if (picture.type() != CV_8UC3 || picture.size() != valid.size()) {
-      notes.push_back("method_map.png: not an image of the result's size; not shown.");
-    } else {
-      std::string legend;
-      for (const auto& choice : method_map->value("choices", nlohmann::json::array())) {
-        if (!choice.is_object()) continue;
-        legend += fmt::format("<span class=\"swatch\" style=\"background:{}\"></span>{} ({} px) ",
-                              escape_html(choice.value("colour", "#000000")),
-                              escape_html(choice.value("method", "?")), choice.value("pixels", 0));
-      }
-      html += "<figure><img class=\"map\" src=\"" + png_data_uri(picture) +
-              "\" alt=\"method per pixel\"><figcaption>method_map.png: the answer each pixel took. " +
-              legend + "</figcaption></figure>\n";
-      any = true;
-    }
+    html += "<figure><img class=\"map\" src=\"" + png_data_uri(pictures.method_map) +
+            "\" alt=\"method per pixel\"><figcaption>method_map.png: the answer each pixel took. " + legend +
+            "</figcaption></figure>\n";
+    any = true;
   }
   html += "</div>\n";
   return any ? html : std::string();
 }
 
-std::string error_section(const AngularErrorMap& error, const std::string& source) {
+std::string error_section(const ErrorPictures& error, const std::string& source) {
   const auto& s = error.stats;
-  const double high = nice_ceiling(std::max(quantile(error.degrees, error.valid, 0.95), 0.1));
-  std::vector<float> values;
-  for (int y = 0; y < error.degrees.rows; ++y)
-    for (int x = 0; x < error.degrees.cols; ++x)
-      if (error.valid.at<std::uint8_t>(y, x) != 0) values.push_back(error.degrees.at<float>(y, x));
   std::string html =
       fmt::format("<p>Against {} (the DiLiGenT measure: the angle between normals, per pixel).</p>\n",
                   escape_html(source));
-  html += "<div class=\"row\">\n<figure><img class=\"map\" src=\"" +
-          png_data_uri(false_colour(error.degrees, error.valid, 0, high, kMagnitudeColormap)) +
+  html += "<div class=\"row\">\n<figure><img class=\"map\" src=\"" + png_data_uri(error.map) +
           "\" alt=\"angular error map\">" +
-          colour_bar_svg(kMagnitudeColormap, 0, high, "angular error (degrees)", "bar-error") +
-          "<figcaption>Angular error; brightest = " + format_number(high) +
+          colour_bar_svg(kMagnitudeColormap, 0, error.high, "angular error (degrees)", "bar-error") +
+          "<figcaption>Angular error; brightest = " + format_number(error.high) +
           "° or more (the 95th percentile, rounded up).</figcaption></figure>\n";
-  html += "<figure>" + histogram_svg(values, high, 40, "angular error (degrees)") +
+  html += "<figure>" + histogram_svg(error.histogram, "angular error (degrees)") +
           "<figcaption>Histogram of the per-pixel error; the last bar counts the pixels at or above " +
-          format_number(high) + "°.</figcaption></figure>\n";
+          format_number(error.high) + "°.</figcaption></figure>\n";
   html += fmt::format(
       "<dl class=\"numbers\" id=\"error-numbers\"><dt>mean</dt><dd>{}°</dd><dt>median</dt><dd>{}°</dd>"
       "<dt>90th percentile</dt><dd>{}°</dd><dt>max</dt><dd>{}°</dd><dt>pixels compared</dt><dd>{}</dd>"
@@ -557,40 +530,59 @@ std::string error_section(const AngularErrorMap& error, const std::string& sourc
   return html;
 }
 
-// Ground-truth normals and the mask to compare in, from --gt or the stack.
-std::optional<std::pair<io::DecodedNormals, std::string>> ground_truth(const Inputs& in,
-                                                                       const ReportOptions& options,
-                                                                       cv::Mat& mask) {
+// Ground-truth normals and the mask to compare in, from --gt or the stack; none without either.
+std::unique_ptr<TruthRows> ground_truth(const Inputs& in, const ReportOptions& options,
+                                        cv::Size result_size) {
+  std::unique_ptr<TruthRows> truth;
+  cv::Mat mask;
   if (options.ground_truth) {
     fs::path file = *options.ground_truth;
     if (fs::is_directory(file)) {
       if (fs::exists(file / "mask.png")) mask = io::read_mask(file / "mask.png");
       file /= "Normal_gt.png";
     }
-    return std::pair{io::read_normal_map(file), file.string()};
-  }
-  if (in.stack && in.stack->ground_truth && !in.stack->ground_truth->normals.empty()) {
-    io::DecodedNormals gt;
-    gt.normals = in.stack->ground_truth->normals;
-    gt.valid = cv::Mat(gt.normals.size(), CV_8UC1, cv::Scalar(0));
-    for (int y = 0; y < gt.normals.rows; ++y)
-      for (int x = 0; x < gt.normals.cols; ++x)
-        if (cv::norm(gt.normals.at<cv::Vec3f>(y, x)) > 0) gt.valid.at<std::uint8_t>(y, x) = 255;
+    truth = truth_from_file(file);
+  } else if (in.stack && in.stack_has_truth) {
+    cv::Rect crop;
+    if (const auto it = in.summary.find("crop"); it != in.summary.end())
+      crop = cv::Rect((*it)[0].get<int>(), (*it)[1].get<int>(), (*it)[2].get<int>(), (*it)[3].get<int>());
+    truth = truth_from_stack(*in.stack_dir, crop);
     mask = in.stack->mask;
-    return std::pair{gt, (*in.stack_dir / "Normal_gt.png").string()};
+  } else {
+    return nullptr;
   }
-  return std::nullopt;
+  if (truth->size() != result_size)
+    fail("{}: ground truth is {}x{}, the result {}x{}", truth->source, truth->size().width,
+         truth->size().height, result_size.width, result_size.height);
+  if (mask.size() == result_size) truth->mask = mask;
+  return truth;
 }
 
 }  // namespace
 
 void ReportOptions::check() const {
   if (viewer_max_pixels < 1) fail("report: viewer_max_pixels must be ≥ 1, got {}", viewer_max_pixels);
+  if (picture_max_pixels < 1) fail("report: picture_max_pixels must be ≥ 1, got {}", picture_max_pixels);
+  if (band_rows < 0) fail("report: band_rows must be ≥ 0, got {}", band_rows);
   if (shadow_threshold && (!(*shadow_threshold >= 0) || !std::isfinite(*shadow_threshold)))
     fail("report: shadow_threshold must be a number ≥ 0, got {}", *shadow_threshold);
   if (ground_truth && !fs::exists(*ground_truth))
     fail("--gt {}: no such file or folder", ground_truth->string());
   if (calibration && !fs::exists(*calibration)) fail("--calibration {}: no such file", calibration->string());
+}
+
+std::size_t report_memory_bytes(int width, int height, const ReportOptions& options) {
+  // Held for the whole image: the solved mask, the ground truth's mask, a double per compared pixel.
+  constexpr std::size_t kWholeImageBytes = 1 + 1 + 8;
+  // Per picture pixel: eight BGRA pictures, their PNGs and base64 in the page, and the page's copy.
+  constexpr std::size_t kPictureBytes = 48;
+  // Per viewer pixel: its model (normals, albedo, chroma, up to 10 coefficients) and its payload.
+  constexpr std::size_t kViewerBytes = 12 + 1 + 4 + 12 + 40 + 60;
+  const auto pixels =
+      static_cast<std::size_t>(std::max(width, 0)) * static_cast<std::size_t>(std::max(height, 0));
+  return pixels * kWholeImageBytes + kReportBandBytes +
+         std::min(pixels, static_cast<std::size_t>(options.picture_max_pixels)) * kPictureBytes +
+         std::min(pixels, static_cast<std::size_t>(options.viewer_max_pixels)) * kViewerBytes;
 }
 
 nlohmann::json ReportSummary::to_json() const {
@@ -602,41 +594,40 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
   if (!fs::is_directory(result_dir)) fail("{}: not a folder (expected a solve result)", result_dir.string());
   if (!fs::exists(result_dir / "normal.png"))
     fail("{}: no normal.png: not a solve result folder", (result_dir / "normal.png").string());
-  const io::SolveFolder folder = io::read_solve_folder(result_dir);
+  io::SolveFolderRows folder(result_dir);
   Inputs in;
   in.result_dir = result_dir;
-  load_inputs(in, folder, options);
+  load_inputs(in, folder.facts(), options);
+  const cv::Size size = folder.size();
 
-  const io::DecodedNormals normals{folder.normals, folder.solved};
-  Page page;
-
-  // The viewer first: it is what people come for.
-  const SurfaceModel model = load_surface_model(folder, options.viewer_max_pixels, in.notes);
-  page.section("viewer", "Relighting viewer", viewer_section(model, in));
-
-  const cv::Mat albedo_full =
-      folder.albedo.empty() ? cv::Mat(normals.normals.size(), CV_32FC1, cv::Scalar(0)) : folder.albedo;
-  page.section("surface", "Normals and albedo",
-               surface_section(in, normals, folder.albedo.empty() ? albedo_full : folder.colour_albedo(),
-                               albedo_full));
+  MapSources sources;
+  sources.folder = &folder;
+  sources.band_rows = options.band_rows;
+  sources.picture_max_pixels = options.picture_max_pixels;
+  sources.viewer_max_pixels = options.viewer_max_pixels;
+  sources.albedo_scale = in.summary.value(
+      folder.has_albedo() && folder.has_chroma() ? "albedo_rgb_png_scale" : "albedo_png_scale", 0.0);
 
   // Depth: --depth (a depth.pfm, or a `lightstage integrate` folder), else RESULT_DIR/depth.pfm.
   fs::path depth_file = result_dir / "depth.pfm";
   if (options.depth)
     depth_file = fs::is_directory(*options.depth) ? *options.depth / "depth.pfm" : *options.depth;
+  DepthUnit depth_unit;
   if (fs::exists(depth_file)) {
-    const cv::Mat depth = io::read_pfm(depth_file);
-    if (depth.type() != CV_32FC1 || depth.size() != normals.normals.size()) {
+    DepthSource depth;
+    depth.rows = io::open_row_reader(depth_file);
+    if (depth.rows->type() != CV_32FC1 || depth.rows->size() != size) {
       if (options.depth)
         fail(
             "{}: depth must be one float channel of {}x{} (the normal map's size), got {} channel(s) of "
             "{}x{}",
-            depth_file.string(), normals.normals.cols, normals.normals.rows, depth.channels(), depth.cols,
-            depth.rows);
+            depth_file.string(), size.width, size.height, CV_MAT_CN(depth.rows->type()),
+            depth.rows->size().width, depth.rows->size().height);
       in.notes.push_back(fmt::format("{} is not one float channel of the normal map's size; not shown.",
                                      depth_file.string()));
     } else {
-      page.section("depth", "Depth", depth_section(depth, normals.valid, depth_file.parent_path(), 0));
+      depth_unit = depth_camera(depth_file.parent_path(), depth);
+      sources.depth = std::move(depth);
     }
   } else if (options.depth) {
     fail("--depth {}: no depth.pfm there", options.depth->string());
@@ -646,6 +637,35 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
         "no depth "
         "relief.");
   }
+
+  // auto's per-pixel choices.
+  if (const auto it = in.summary.find("method_map");
+      it != in.summary.end() && it->is_object() && fs::exists(result_dir / "method_map.png")) {
+    try {
+      sources.method_map = io::open_row_reader(result_dir / "method_map.png");
+    } catch (const InputError&) {
+    }
+    if (!sources.method_map || sources.method_map->type() != CV_8UC3 || sources.method_map->size() != size) {
+      in.notes.push_back("method_map.png: not an image of the result's size; not shown.");
+      sources.method_map.reset();
+    }
+  }
+
+  sources.truth = ground_truth(in, options, size);
+  const ResultPictures pictures = draw_result_maps(sources, in.notes);
+  if (pictures.factor > 1)
+    in.notes.push_back(
+        fmt::format("The pictures show the {}x{} result at 1/{} of its size, each pixel the mean of {}x{} "
+                    "(page budget {} "
+                    "pixels a picture).",
+                    size.width, size.height, pictures.factor, pictures.factor, pictures.factor,
+                    options.picture_max_pixels));
+
+  Page page;
+  // The viewer first: it is what people come for.
+  page.section("viewer", "Relighting viewer", viewer_section(pictures.viewer, in));
+  page.section("surface", "Normals and albedo", surface_section(pictures));
+  if (pictures.depth) page.section("depth", "Depth", depth_section(*pictures.depth, depth_unit, 0));
 
   if (const std::string lights = lights_section(in); !lights.empty()) {
     page.section("lights", "Lights on the hemisphere", lights);
@@ -662,22 +682,16 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
         "found.");
   }
 
-  if (const std::string html = residual_section(in, normals.valid, in.notes); !html.empty())
+  if (const std::string html = residual_section(in, pictures); !html.empty())
     page.section("residual", "Residual and confidence", html);
   else
     in.notes.push_back("No residual.pfm or confidence.pfm in the result folder.");
 
-  cv::Mat mask;
-  if (const auto gt = ground_truth(in, options, mask)) {
-    if (gt->first.normals.size() != normals.normals.size())
-      fail("{}: ground truth is {}x{}, the result {}x{}", gt->second, gt->first.normals.cols,
-           gt->first.normals.rows, normals.normals.cols, normals.normals.rows);
-    if (mask.empty() || mask.size() != gt->first.valid.size()) mask = gt->first.valid;
-    const AngularErrorMap error = angular_error(normals.normals, gt->first.normals, mask);
-    page.section("error", "Angular error against ground truth", error_section(error, gt->second));
-  } else {
+  if (pictures.error)
+    page.section("error", "Angular error against ground truth",
+                 error_section(*pictures.error, sources.truth->source));
+  else
     in.notes.push_back("No ground truth (Normal_gt.png in the input stack, or --gt): no error map.");
-  }
 
   std::string notes_html;
   for (const auto& n : in.notes) notes_html += "<li>" + escape_html(n) + "</li>\n";

@@ -130,17 +130,21 @@ std::string hemisphere_svg(const std::vector<LightSeries>& series, bool link_fir
   return svg;
 }
 
-std::string histogram_svg(const std::vector<float>& values, double high, int bins,
-                          const std::string& x_label) {
+HistogramCounts::HistogramCounts(double high, int bins)
+    : high_(high > 0 ? high : 1.0), counts_(static_cast<std::size_t>(std::max(bins, 1)) + 1, 0) {}
+
+void HistogramCounts::add(float value) {
+  if (!std::isfinite(value)) return;
+  const int n = static_cast<int>(counts_.size()) - 1;
+  const auto bin = value >= high_ ? n : std::clamp(static_cast<int>(value / high_ * n), 0, n - 1);
+  ++counts_[static_cast<std::size_t>(bin)];
+}
+
+std::string histogram_svg(const HistogramCounts& histogram, const std::string& x_label) {
   const int width = 460, height = 240, left = 56, right = 16, top = 12, bottom = 44;
-  const double top_value = high > 0 ? high : 1.0;
-  const int n = std::max(bins, 1);
-  std::vector<std::size_t> counts(static_cast<std::size_t>(n) + 1, 0);  // last: above `high`
-  for (const float v : values) {
-    if (!std::isfinite(v)) continue;
-    const auto bin = v >= top_value ? n : std::clamp(static_cast<int>(v / top_value * n), 0, n - 1);
-    ++counts[static_cast<std::size_t>(bin)];
-  }
+  const double top_value = histogram.high();
+  const auto& counts = histogram.counts();
+  const int n = static_cast<int>(counts.size()) - 1;
   const double peak =
       static_cast<double>(std::max<std::size_t>(1, *std::max_element(counts.begin(), counts.end())));
   const double plot_w = width - left - right, plot_h = height - top - bottom;

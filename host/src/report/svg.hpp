@@ -31,10 +31,21 @@ struct LightSeries {
 // (nominal -> calibrated).
 std::string hemisphere_svg(const std::vector<LightSeries>& series, bool link_first_two, int size = 440);
 
-// A histogram of `values` over [0, high] in `bins` bins, values above `high`
-// counted in a last, marked bin.
-std::string histogram_svg(const std::vector<float>& values, double high, int bins,
-                          const std::string& x_label);
+// Counts of values over [0, high] in counts.size() - 1 bins, the values at or
+// above `high` in a last, marked bin: filled a band of values at a time.
+class HistogramCounts {
+ public:
+  HistogramCounts(double high, int bins);
+  void add(float value);  // not finite: not counted
+  double high() const { return high_; }
+  const std::vector<std::size_t>& counts() const { return counts_; }
+
+ private:
+  double high_;
+  std::vector<std::size_t> counts_;
+};
+
+std::string histogram_svg(const HistogramCounts& histogram, const std::string& x_label);
 
 // Bars, one per entry, against their index (1-based labels); `high` is the
 // top of the y axis (≤ 0: the largest value).

@@ -19,39 +19,39 @@ namespace {
 
 static_assert(std::endian::native == std::endian::little, "the viewer payload is written little-endian");
 
-// Every stride-th row and column.
-cv::Mat subsample(const cv::Mat& image, int stride) {
-  if (stride <= 1 || image.empty()) return image;
-  cv::Mat out((image.rows + stride - 1) / stride, (image.cols + stride - 1) / stride, image.type());
-  for (int y = 0; y < out.rows; ++y) {
-    for (int x = 0; x < out.cols; ++x) {
-      std::memcpy(out.ptr(y, x), image.ptr(y * stride, x * stride), image.elemSize());
-    }
+// Every stride-th column of the rows of `band` (whose first row is y0) that are
+// multiples of the stride, appended to `out` from its row y0 / stride on.
+void add_subsampled(const cv::Mat& band, int y0, int stride, cv::Mat& out) {
+  for (int r = 0; r < band.rows; ++r) {
+    const int y = y0 + r;
+    if (y % stride != 0) continue;
+    auto* dst = out.ptr(y / stride);
+    for (int x = 0; x < out.cols; ++x)
+      std::memcpy(dst + x * band.elemSize(), band.ptr(r, x * stride), band.elemSize());
   }
-  return out;
 }
 
 }  // namespace
 
-SurfaceModel load_surface_model(const io::SolveFolder& folder, int max_pixels,
-                                std::vector<std::string>& notes) {
+SurfaceModelBuilder::SurfaceModelBuilder(const io::SolveFolderRows& folder, int max_pixels,
+                                         std::vector<std::string>& notes) {
   if (max_pixels < 1) fail("report: viewer pixel budget must be ≥ 1, got {}", max_pixels);
-  const RelightModel relight_model = lightstage::relight_model(folder);
-  const nlohmann::json& summary = folder.summary;
-  SurfaceModel model;
-  model.source_size = relight_model.normals.size();
-  model.display_scale = folder.chroma.empty() ? folder.albedo_png_scale : folder.albedo_rgb_png_scale;
-  if (folder.albedo.empty())
+  const io::SolveFolder& facts = folder.facts();
+  const nlohmann::json& summary = facts.summary;
+  SurfaceModel& model = model_;
+  model.source_size = folder.size();
+  model.display_scale = folder.has_chroma() ? facts.albedo_rgb_png_scale : facts.albedo_png_scale;
+  if (!folder.has_albedo())
     notes.push_back(
         "No albedo.pfm or albedo.png in the result folder: the viewer (like `lightstage relight`) uses "
         "albedo 1.");
-  else if (folder.albedo_from_png)
+  else if (facts.albedo_from_png)
     notes.push_back(
         "No albedo.pfm in the result folder: the viewer uses albedo.png (16-bit, clipped at its scale).");
-  if (relight_model.order > 0) {
+  if (facts.reflectance_order > 0) {
     model.kind = ShadingKind::kBiPolynomial;
-    model.order = relight_model.order;
-    model.lobe_width = relight_model.lobe_width;
+    model.order = facts.reflectance_order;
+    model.lobe_width = facts.lobe_width;
   } else if (const auto it = summary.find("reflectance");
              it != summary.end() && it->is_object() && it->value("model", "") == "bipolynomial") {
     notes.push_back(
@@ -67,13 +67,42 @@ SurfaceModel load_surface_model(const io::SolveFolder& folder, int max_pixels,
         fmt::format("The viewer shows every {}th pixel of the {}x{} result (page size budget {} pixels).",
                     model.stride, model.source_size.width, model.source_size.height, max_pixels));
   }
-  model.normals = subsample(relight_model.normals, model.stride);
-  model.valid = subsample(relight_model.solved, model.stride);
-  model.albedo = subsample(relight_model.albedo, model.stride);
-  model.chroma = subsample(relight_model.chroma, model.stride);
+  const cv::Size size((model.source_size.width + model.stride - 1) / model.stride,
+                      (model.source_size.height + model.stride - 1) / model.stride);
+  model.normals = cv::Mat(size, CV_32FC3);
+  model.valid = cv::Mat(size, CV_8UC1);
+  model.albedo = cv::Mat(size, CV_32FC1);
+  if (folder.has_chroma()) model.chroma = cv::Mat(size, CV_32FC3);
   if (model.kind == ShadingKind::kBiPolynomial)
-    model.coefficients = subsample(relight_model.coefficients, model.stride);
-  return model;
+    model.coefficients = cv::Mat(size, CV_32FC(relighting_term_count(model.order, model.lobe_width)));
+}
+
+void SurfaceModelBuilder::add(const io::SolveFolder& band, int y0) {
+  if (y0 != rows_added_ || y0 + band.normals.rows > model_.source_size.height)
+    fail("report: viewer rows from {} given after {} of {}", y0, rows_added_, model_.source_size.height);
+  const RelightModel rows = lightstage::relight_model(band);
+  const int stride = model_.stride;
+  add_subsampled(rows.normals, y0, stride, model_.normals);
+  add_subsampled(rows.solved, y0, stride, model_.valid);
+  add_subsampled(rows.albedo, y0, stride, model_.albedo);
+  if (!model_.chroma.empty()) add_subsampled(rows.chroma, y0, stride, model_.chroma);
+  if (model_.kind == ShadingKind::kBiPolynomial)
+    add_subsampled(rows.coefficients, y0, stride, model_.coefficients);
+  rows_added_ += band.normals.rows;
+}
+
+SurfaceModel SurfaceModelBuilder::finish() {
+  if (rows_added_ != model_.source_size.height)
+    fail("report: the viewer was given {} of the result's {} rows", rows_added_, model_.source_size.height);
+  return std::move(model_);
+}
+
+SurfaceModel load_surface_model(io::SolveFolderRows& folder, int max_pixels, std::vector<std::string>& notes,
+                                int band_rows) {
+  SurfaceModelBuilder builder(folder, max_pixels, notes);
+  const int height = folder.size().height, step = std::max(band_rows, 1);
+  for (int y = 0; y < height; y += step) builder.add(folder.read(y, std::min(step, height - y)), y);
+  return builder.finish();
 }
 
 namespace {

@@ -47,7 +47,7 @@ class AngularErrorAccumulator {
   AngularErrorStats stats() const;
 
  private:
-  std::vector<double> errors_;
+  mutable std::vector<double> errors_;  // sorted by stats()
   double sum_ = 0;
   std::size_t missing_ = 0;
 };

@@ -44,6 +44,13 @@ struct ReportOptions {
   std::optional<double> shadow_threshold;
   // The viewer embeds at most this many pixels (larger results are subsampled).
   int viewer_max_pixels = 1 << 20;
+  // Each picture embeds at most this many pixels (larger results are shown
+  // averaged over blocks of pixels).
+  int picture_max_pixels = 1 << 21;
+  // The result's maps are read this many rows at a time; 0 = as many as fit a
+  // few tens of megabytes (result_maps.hpp), so that a result larger than
+  // memory is reported from its files.
+  int band_rows = 0;
 
   void check() const;  // throws InputError naming the field and value
 };
@@ -56,6 +63,12 @@ struct ReportSummary {
 
   nlohmann::json to_json() const;
 };
+
+// An upper bound of the memory write_report takes (beside the program) for a
+// result of `width` × `height` pixels: what it holds for the whole image (the
+// solved and ground-truth masks, the compared pixels' errors), a band of rows,
+// the pictures and viewer data at their page budgets, and the page itself.
+std::size_t report_memory_bytes(int width, int height, const ReportOptions& options = {});
 
 // Builds the page for `result_dir`. `summary`, when given, receives the same
 // information write_report returns (without file and bytes).

@@ -15,6 +15,7 @@
 // a colour result (SurfaceModel::chroma) in colour as relight_colour renders it.
 
 #include "lightstage/common/geometry.hpp"
+#include "lightstage/host/io/solve_folder_rows.hpp"
 #include "lightstage/host/io/solve_output.hpp"
 
 #include <nlohmann/json.hpp>
@@ -47,9 +48,24 @@ struct SurfaceModel {
 // albedo and, when a bi-polynomial model was fitted, its coefficient maps — the
 // model `lightstage relight` renders (relight_model), so the two agree. Results
 // larger than `max_pixels` are subsampled with an integer stride (recorded in the
-// model). Notes on what was used or left out are appended to `notes`.
-SurfaceModel load_surface_model(const io::SolveFolder& folder, int max_pixels,
-                                std::vector<std::string>& notes);
+// model). Gathered a band of rows at a time, so that a result larger than
+// memory never is held whole; notes on what was used or left out are appended
+// to `notes`.
+class SurfaceModelBuilder {
+ public:
+  SurfaceModelBuilder(const io::SolveFolderRows& folder, int max_pixels, std::vector<std::string>& notes);
+  // The folder's next band (SolveFolderRows::read), whose first row is `y0`.
+  void add(const io::SolveFolder& band, int y0);
+  SurfaceModel finish();
+
+ private:
+  SurfaceModel model_;
+  int rows_added_ = 0;
+};
+
+// The builder given every row of `folder`, `band_rows` at a time.
+SurfaceModel load_surface_model(io::SolveFolderRows& folder, int max_pixels, std::vector<std::string>& notes,
+                                int band_rows = 256);
 
 // The value of pixel (x, y) under `light` (normalised here); 0 where not valid.
 double shade(const SurfaceModel& model, int x, int y, const Vec3& light);

@@ -34,7 +34,7 @@ struct BandPlan {
   std::size_t whole_bytes = 0;   // the whole image solved at once
   std::size_t fixed_bytes = 0;   // held whatever the band height: the masks, the errors against ground truth
   std::size_t row_bytes = 0;     // per row of a band: decoded images, observations, the band's maps
-  std::size_t report_bytes = 0;  // the report after the solve (it reads the result's maps whole)
+  std::size_t report_bytes = 0;  // the report after the solve (report::report_memory_bytes)
   std::size_t limit_bytes = 0;   // the --memory-limit planned for
   int band_rows = 0;             // rows per band (the image's height: one band, solved whole)
   int bands = 1;

@@ -1,0 +1,39 @@
+#pragma once
+// A picture of the report (BGRA, maps.hpp) gathered a band of rows at a time
+// into its overview: the picture itself when it fits the page's pixel budget,
+// else each factor × factor block of it averaged into one pixel (over the
+// block's opaque pixels; alpha is the block's opaque share), so that a result
+// larger than memory is drawn without holding its full-size pictures.
+
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+namespace lightstage::report {
+
+// The smallest whole factor that brings `size` within `max_pixels` (≥ 1).
+int overview_factor(cv::Size size, int max_pixels);
+
+class Overview {
+ public:
+  Overview(cv::Size size, int factor);
+
+  // The next band.rows rows of the picture (CV_8UC4, the picture's width).
+  void add(const cv::Mat& band);
+  // After every row: the overview, ceil(size / factor).
+  cv::Mat finish();
+
+  int factor() const { return factor_; }
+
+ private:
+  void emit_row();
+
+  cv::Size size_;
+  int factor_ = 1;
+  int rows_added_ = 0;
+  cv::Mat out_;
+  std::vector<double> sums_;       // per overview pixel of the row being gathered: b, g, r, opaque count
+  std::vector<int> block_pixels_;  // pixels of each block so far
+};
+
+}  // namespace lightstage::report

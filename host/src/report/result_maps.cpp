@@ -1,0 +1,268 @@
+#include "report/result_maps.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/host/io/solve_output_writer.hpp"
+#include "lightstage/host/io/stack_bands.hpp"
+#include "report/maps.hpp"
+#include "report/overview.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace lightstage::report {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+class FileTruth final : public TruthRows {
+ public:
+  explicit FileTruth(const fs::path& file) : rows_(io::open_row_reader(file)) { source = file.string(); }
+  cv::Size size() const override { return rows_->size(); }
+  io::DecodedNormals read(int y0, int rows) override {
+    cv::Mat encoded;
+    rows_->read(y0, rows, encoded);
+    return io::decode_normal_map(encoded, rows_->path().string());
+  }
+
+ private:
+  std::unique_ptr<io::RowReader> rows_;
+};
+
+class StackTruth final : public TruthRows {
+ public:
+  StackTruth(std::unique_ptr<io::StackBands> stack, const cv::Rect& crop)
+      : stack_(std::move(stack)), crop_(crop.empty() ? cv::Rect({0, 0}, stack_->size()) : crop) {}
+  cv::Size size() const override { return crop_.size(); }
+  io::DecodedNormals read(int y0, int rows) override {
+    ImageStack band = stack_->read_band(crop_.y + y0, rows);
+    io::DecodedNormals truth;
+    truth.normals = band.ground_truth->normals.colRange(crop_.x, crop_.x + crop_.width).clone();
+    truth.valid = cv::Mat(truth.normals.size(), CV_8UC1, cv::Scalar(0));
+    for (int y = 0; y < truth.normals.rows; ++y)
+      for (int x = 0; x < truth.normals.cols; ++x)
+        if (cv::norm(truth.normals.at<cv::Vec3f>(y, x)) > 0) truth.valid.at<std::uint8_t>(y, x) = 255;
+    return truth;
+  }
+
+ private:
+  std::unique_ptr<io::StackBands> stack_;
+  cv::Rect crop_;
+};
+
+// The finite values of `values` where `valid` is nonzero, in row order.
+std::vector<float> valid_values(const cv::Mat& values, const cv::Mat& valid) {
+  std::vector<float> out;
+  for (int y = 0; y < values.rows; ++y)
+    for (int x = 0; x < values.cols; ++x)
+      if ((valid.empty() || valid.at<std::uint8_t>(y, x) != 0) && std::isfinite(values.at<float>(y, x)))
+        out.push_back(values.at<float>(y, x));
+  return out;
+}
+
+// A quantile of a map's valid values over every band: counted in the first pass, gathered in the second
+// (maps.hpp's quantile over the whole map, exactly).
+class MapQuantile {
+ public:
+  explicit MapQuantile(double q) : q_(q) {}
+  void count(const cv::Mat& values, const cv::Mat& valid) {
+    const auto v = valid_values(values, valid);
+    quantile_.count(v.data(), v.size());
+  }
+  void locate() { found_ = quantile_.locate(q_); }
+  void gather(const cv::Mat& values, const cv::Mat& valid) {
+    if (!found_) return;
+    const auto v = valid_values(values, valid);
+    quantile_.gather(v.data(), v.size());
+  }
+  double value() const { return found_ ? quantile_.value() : 0.0; }
+
+ private:
+  double q_;
+  io::BandQuantile quantile_;
+  bool found_ = false;
+};
+
+// Where depth can be drawn: solved, finite and not 0.
+cv::Mat usable_depth(const cv::Mat& depth, const cv::Mat& solved) {
+  cv::Mat usable = solved.clone();
+  for (int y = 0; y < depth.rows; ++y)
+    for (int x = 0; x < depth.cols; ++x)
+      if (!std::isfinite(depth.at<float>(y, x)) || depth.at<float>(y, x) == 0)
+        usable.at<std::uint8_t>(y, x) = 0;
+  return usable;
+}
+
+}  // namespace
+
+std::unique_ptr<TruthRows> truth_from_file(const fs::path& file) { return std::make_unique<FileTruth>(file); }
+
+std::unique_ptr<TruthRows> truth_from_stack(const fs::path& stack_dir, const cv::Rect& crop) {
+  io::LoadOptions options;
+  options.min_images = 1;
+  options.frame_pixels = false;
+  auto stack = std::make_unique<io::StackBands>(stack_dir, options);
+  auto truth = std::make_unique<StackTruth>(std::move(stack), crop);
+  truth->source = (stack_dir / "Normal_gt.png").string();
+  return truth;
+}
+
+ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& notes) {
+  io::SolveFolderRows& folder = *sources.folder;
+  const cv::Size size = folder.size();
+  const int height = size.height;
+  ResultPictures out;
+  const std::size_t band_bytes = folder.bytes_per_pixel() + 64;  // + depth, truth, error and the pictures
+  out.band_rows = sources.band_rows > 0
+                      ? sources.band_rows
+                      : static_cast<int>(std::clamp<std::size_t>(
+                            kReportBandBytes / (band_bytes * static_cast<std::size_t>(size.width)), 1,
+                            static_cast<std::size_t>(height)));
+  const int step = out.band_rows;
+  const auto for_each_band = [&](auto&& visit) {
+    for (int y = 0; y < height; y += step) visit(y, std::min(step, height - y));
+  };
+
+  // Pass 1: the viewer's model, the error's statistics, the quantiles counted.
+  SurfaceModelBuilder viewer(folder, sources.viewer_max_pixels, notes);
+  cv::Mat solved(size, CV_8UC1);
+  MapQuantile albedo_q(0.995), residual_q(0.99), depth_median(0.5), error_q(0.95);
+  float depth_low = std::numeric_limits<float>::infinity(), depth_high = -depth_low;
+  AngularErrorAccumulator errors;
+  const bool scale_albedo = !(sources.albedo_scale > 0) && folder.has_albedo();
+  // The band's error map, and the truth's mask of it.
+  const auto error_rows = [&](const io::SolveFolder& band, int y0, int rows, AngularErrorAccumulator& into) {
+    AngularErrorMap map;
+    map.degrees = cv::Mat(rows, size.width, CV_32FC1, cv::Scalar::all(0));
+    map.valid = cv::Mat(rows, size.width, CV_8UC1, cv::Scalar::all(0));
+    const io::DecodedNormals truth = sources.truth->read(y0, rows);
+    const cv::Mat mask =
+        sources.truth->mask.empty() ? truth.valid : sources.truth->mask.rowRange(y0, y0 + rows);
+    into.add(band.normals, truth.normals, mask, &map);
+    return map;
+  };
+  for_each_band([&](int y0, int rows) {
+    const io::SolveFolder band = folder.read(y0, rows);
+    viewer.add(band, y0);
+    band.solved.copyTo(solved.rowRange(y0, y0 + rows));
+    if (scale_albedo) albedo_q.count(band.albedo, band.solved);
+    if (!band.residual.empty()) residual_q.count(band.residual, band.solved);
+    if (sources.depth) {
+      cv::Mat depth;
+      sources.depth->rows->read(y0, rows, depth);
+      const cv::Mat usable = usable_depth(depth, band.solved);
+      for (const float v : valid_values(depth, usable)) {
+        depth_low = std::min(depth_low, v);
+        depth_high = std::max(depth_high, v);
+      }
+      if (sources.depth->focal_px > 0) depth_median.count(depth, usable);
+    }
+    if (sources.truth) {
+      const AngularErrorMap map = error_rows(band, y0, rows, errors);
+      error_q.count(map.degrees, map.valid);
+    }
+  });
+  out.viewer = viewer.finish();
+  for (MapQuantile* q : {&albedo_q, &residual_q, &depth_median, &error_q}) q->locate();
+
+  // Pass 2: the quantiles gathered.
+  for_each_band([&](int y0, int rows) {
+    const io::SolveFolder band = folder.read(y0, rows);
+    if (scale_albedo) albedo_q.gather(band.albedo, band.solved);
+    if (!band.residual.empty()) residual_q.gather(band.residual, band.solved);
+    if (sources.depth && sources.depth->focal_px > 0) {
+      cv::Mat depth;
+      sources.depth->rows->read(y0, rows, depth);
+      depth_median.gather(depth, usable_depth(depth, band.solved));
+    }
+    if (sources.truth) {
+      AngularErrorAccumulator again;
+      const AngularErrorMap map = error_rows(band, y0, rows, again);
+      error_q.gather(map.degrees, map.valid);
+    }
+  });
+
+  // Pass 3: every picture drawn.
+  out.factor = overview_factor(size, sources.picture_max_pixels);
+  const auto overview = [&] { return Overview(size, out.factor); };
+  Overview normals = overview(), albedo = overview(), shaded = overview(), depth_colour = overview(),
+           residual = overview(), confidence = overview(), method_map = overview(), error_map = overview();
+  out.colour_albedo = folder.has_albedo() && folder.has_chroma();
+  out.albedo_shown = sources.albedo_scale > 0 ? sources.albedo_scale : std::max(albedo_q.value(), 1e-12);
+  out.residual_high = nice_ceiling(residual_q.value());
+  DepthPictures depth_pictures;
+  if (sources.depth) {
+    depth_pictures.low = std::isfinite(depth_low) ? depth_low : 0.0;
+    depth_pictures.high = std::isfinite(depth_high) ? depth_high : 0.0;
+    depth_pictures.pixel_size = sources.depth->pixel_size;
+    if (sources.depth->focal_px > 0 && depth_median.value() > 0)
+      depth_pictures.pixel_size = depth_median.value() / sources.depth->focal_px;
+  }
+  ErrorPictures error;
+  if (sources.truth) {
+    error.stats = errors.stats();
+    error.high = nice_ceiling(std::max(error_q.value(), 0.1));
+    error.histogram = HistogramCounts(error.high, 40);
+  }
+  bool method_map_ok = sources.method_map != nullptr;
+  for_each_band([&](int y0, int rows) {
+    const io::SolveFolder band = folder.read(y0, rows);
+    normals.add(normal_colours(band.normals, band.solved));
+    const cv::Mat grey_albedo =
+        band.albedo.empty() ? cv::Mat(band.solved.size(), CV_32FC1, cv::Scalar(0)) : band.albedo;
+    albedo.add(grey(out.colour_albedo ? band.colour_albedo() : grey_albedo, band.solved, out.albedo_shown));
+    if (sources.depth) {
+      // One row more on either side: the relief's slopes at the band's edges.
+      const int top = std::max(0, y0 - 1), bottom = std::min(height, y0 + rows + 1);
+      cv::Mat depth;
+      sources.depth->rows->read(top, bottom - top, depth);
+      const cv::Mat usable = usable_depth(depth, solved.rowRange(top, bottom));
+      const cv::Range inner(y0 - top, y0 - top + rows);
+      shaded.add(shaded_depth(depth, usable, depth_pictures.pixel_size).rowRange(inner));
+      depth_colour.add(false_colour(depth.rowRange(inner), usable.rowRange(inner), depth_pictures.low,
+                                    depth_pictures.high, kDepthColormap));
+    }
+    if (!band.residual.empty())
+      residual.add(false_colour(band.residual, band.solved, 0, out.residual_high, kMagnitudeColormap));
+    if (!band.confidence.empty())
+      confidence.add(false_colour(band.confidence, band.solved, 0, 1.0, kMagnitudeColormap));
+    if (method_map_ok) {
+      try {
+        cv::Mat choices;
+        sources.method_map->read(y0, rows, choices);
+        cv::Mat bgra;
+        cv::cvtColor(choices, bgra, cv::COLOR_BGR2BGRA);
+        method_map.add(bgra);
+      } catch (const InputError& e) {
+        notes.push_back(fmt::format("method_map.png: {}; not shown.", e.what()));
+        method_map_ok = false;
+      }
+    }
+    if (sources.truth) {
+      AngularErrorAccumulator again;
+      const AngularErrorMap map = error_rows(band, y0, rows, again);
+      error_map.add(false_colour(map.degrees, map.valid, 0, error.high, kMagnitudeColormap));
+      for (int y = 0; y < map.degrees.rows; ++y)
+        for (int x = 0; x < map.degrees.cols; ++x)
+          if (map.valid.at<std::uint8_t>(y, x) != 0) error.histogram.add(map.degrees.at<float>(y, x));
+    }
+  });
+  out.normals = normals.finish();
+  out.albedo = albedo.finish();
+  if (sources.depth) {
+    depth_pictures.shaded = shaded.finish();
+    depth_pictures.colour = depth_colour.finish();
+    out.depth = std::move(depth_pictures);
+  }
+  if (folder.has_residual()) out.residual = residual.finish();
+  if (folder.has_confidence()) out.confidence = confidence.finish();
+  if (method_map_ok) out.method_map = method_map.finish();
+  if (sources.truth) {
+    error.map = error_map.finish();
+    out.error = std::move(error);
+  }
+  return out;
+}
+
+}  // namespace lightstage::report
