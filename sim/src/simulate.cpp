@@ -90,7 +90,8 @@ nlohmann::json World::describe() const {
   return j;
 }
 
-ImageStack simulate_stack(const Rig& rig, const SimulateOptions& options, const FrameProgress& on_frames) {
+ImageStack simulate_stack(const Rig& rig, const SimulateOptions& options, const FrameProgress& on_frames,
+                          const FrameSink& sink) {
   const auto start = std::chrono::steady_clock::now();
   const World world(rig, options);
   ImageStack stack;
@@ -99,7 +100,9 @@ ImageStack simulate_stack(const Rig& rig, const SimulateOptions& options, const 
   // (seed, frame index), so the result does not depend on the thread count.
   stack.frames.resize(rig.leds.size());
   parallel_for(static_cast<int>(rig.leds.size()), std::min(resolve_threads(options.threads), 2), [&](int i) {
-    stack.frames[static_cast<std::size_t>(i)] = world.frame(static_cast<std::size_t>(i));
+    Frame& frame = stack.frames[static_cast<std::size_t>(i)];
+    frame = world.frame(static_cast<std::size_t>(i));
+    if (sink) sink(static_cast<std::size_t>(i), frame);
     if (on_frames) on_frames(1);
   });
   stack.mask = world.renderer().mask().clone();

@@ -58,5 +58,25 @@ TEST(LargeStack, SolveKeepsWithinTheMemoryLimitWithTheWholeImageResult) {
             read_json(dir / "whole" / "summary.json")["error_vs_ground_truth"]);
 }
 
+TEST(LargeStack, SimulateWritesEachFrameAsItIsRenderedWithoutHoldingTheStack) {
+  LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("test_pipeline_simulate (the same files)");
+  const fs::path dir = testing::scratch_dir();
+  // 96 frames of 640x480, 16-bit RGB: 177 MB decoded; held whole, the simulation took 327 MB.
+  const auto r = testing::run_lightstage({"simulate", "--quiet", "--rig",
+                                          (testing::source_dir() / "hw/rigs/sim-dome.yaml").string(),
+                                          "--scene", "bumps", "--colour", "patches", "--width", "640",
+                                          "--height", "480", "--out", (dir / "stack").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::size_t decoded = std::size_t{96} * 640 * 480 * 6;
+  std::printf("640x480x96 RGB simulate: %.0f MB peak, frames %.0f MB decoded\n", r.peak_rss_bytes / 1e6,
+              decoded / 1e6);
+  EXPECT_LT(r.peak_rss_bytes, decoded);
+  const nlohmann::json manifest = read_json(dir / "stack" / "manifest.json");
+  EXPECT_EQ(manifest["width"], 640);
+  EXPECT_EQ(manifest["height"], 480);
+  EXPECT_EQ(manifest["frames"].size(), 96u);
+  EXPECT_EQ(testing::read_text(dir / "stack" / "filenames.txt").substr(0, 8), "001.png\n");
+}
+
 }  // namespace
 }  // namespace lightstage

@@ -3,6 +3,7 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
 #include "lightstage/common/rig.hpp"
+#include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/output_folder.hpp"
 #include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/io/stack_io.hpp"
@@ -113,20 +114,34 @@ nlohmann::json simulate_to_folder(const std::filesystem::path& rig_path, const s
   check_out(out, overwrite);
   const Rig rig = load_rig(rig_path);
   const auto start = std::chrono::steady_clock::now();
-  const ImageStack stack = sim::simulate_stack(rig, options, on_frames);
+  std::error_code error;
+  std::filesystem::create_directories(out, error);
+  if (error) fail("{}: cannot create folder: {}", out.string(), error.message());
+  // Each frame goes to its file as it is rendered: the stack is never held whole.
+  cv::Size size;
+  const ImageStack stack = sim::simulate_stack(rig, options, on_frames, [&](std::size_t i, Frame& frame) {
+    const bool is_float = frame.image.depth() == CV_32F;
+    frame.filename = fmt::format("{:03}.{}", i + 1, is_float ? "pfm" : "png");
+    if (is_float)
+      io::write_pfm(out / frame.filename, frame.image);
+    else
+      io::write_png(out / frame.filename, frame.image);
+    if (i == 0) size = frame.image.size();
+    frame.image.release();
+  });
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const nlohmann::json manifest = {
       {"source", "simulated"},
       {"rig", {{"name", rig.name}, {"file", rig_path.string()}}},
       {"simulation", sim::describe(rig, options)},
   };
-  io::write_stack(out, stack, manifest);
-  logger("host")->info("simulated {} frames of {}x{} in {:.2f} s into {}", stack.frames.size(), stack.width(),
-                       stack.height(), seconds, out.string());
+  io::write_stack(out, stack, manifest, /*write_images=*/false);
+  logger("host")->info("simulated {} frames of {}x{} in {:.2f} s into {}", stack.frames.size(), size.width,
+                       size.height, seconds, out.string());
   return {{"stack", out.string()},
           {"frames", stack.frames.size()},
-          {"width", stack.width()},
-          {"height", stack.height()},
+          {"width", size.width},
+          {"height", size.height},
           {"seconds", seconds}};
 }
 

@@ -1,5 +1,6 @@
 #include "lightstage/host/capture/stack_writer.hpp"
 
+#include "io/image_header.hpp"
 #include "io/stack_manifest.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
@@ -101,7 +102,7 @@ PreviousPlan CaptureStackWriter::resume(const std::vector<int>& led_ids, const C
       fail("{}: frames[{}] is LED {}, but the plan has LED {} there", manifest_path.string(), k,
            listed.frame.led_id, led_ids[index]);
     }
-    listed.frame.image = io::read_image(out_ / listed.frame.filename);
+    io::read_image_header(out_ / listed.frame.filename);  // there, and an image (errors name the file)
     frames_[index] = std::move(listed.frame);
     frame_extra_[index] = std::move(listed.extra);
   }
@@ -185,6 +186,7 @@ void CaptureStackWriter::add_frame(std::size_t index, const Take& take) {
     frame.dark = dark_image(planned.exposure);
   }
   write_image(frame.filename, frame.image);
+  frame.image.release();  // on disk now: a capture holds no frame's pixels (the index needs none)
   frames_[index] = std::move(frame);
   frame_extra_[index] = stamps(taken);
 }
@@ -228,6 +230,7 @@ void CaptureStackWriter::add_hdr_frame(std::size_t index, const std::vector<Take
   frame.black_level = 0;
   frame.saturation_level = merged.saturation_level;
   io::write_pfm(out_ / frame.filename, frame.image);
+  frame.image.release();
   frames_[index] = std::move(frame);
   frame_extra_[index] = {{"bracket_exposures_us", exposures},
                          {"bracket", details},

@@ -1,5 +1,6 @@
 #include "lightstage/host/io/stack_io.hpp"
 
+#include "io/image_header.hpp"
 #include "io/stack_checks.hpp"
 #include "io/stack_index.hpp"
 #include "io/stack_manifest.hpp"
@@ -296,9 +297,26 @@ ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
 void write_stack(const fs::path& dir, const ImageStack& stack, const nlohmann::json& extra_manifest,
                  bool write_images) {
   if (stack.frames.empty()) fail("{}: cannot write a stack without frames", dir.string());
-  const cv::Mat& first = stack.frames.front().image;
   StackFiles files;
-  for (std::size_t i = 0; i < stack.frames.size(); ++i) {
+  if (!write_images) {
+    // The images are on disk (a capture or a simulation wrote each as it came): their pixels need not be
+    // held, and the first file's header gives the size the mask must have.
+    for (std::size_t i = 0; i < stack.frames.size(); ++i) {
+      const std::string& name = stack.frames[i].filename;
+      if (name.empty() || name.find('/') != std::string::npos || name.find('\n') != std::string::npos)
+        fail("{}: frame {} file name '{}' must be a plain file name", dir.string(), i, name);
+      files.frames.push_back(name);
+    }
+    const ImageHeader header = read_image_header(dir / files.frames.front());
+    const cv::Size size(static_cast<int>(header.width), static_cast<int>(header.height));
+    files.size = size;
+    if (!stack.mask.empty() && (stack.mask.type() != CV_8UC1 || stack.mask.size() != size))
+      fail("{}: mask must be CV_8UC1 of {}x{}, got type {} of {}", dir.string(), size.width, size.height,
+           stack.mask.type(), size_text(stack.mask));
+  }
+  const cv::Mat& first = stack.frames.front().image;
+  if (write_images) files.size = first.size();
+  for (std::size_t i = 0; write_images && i < stack.frames.size(); ++i) {
     const Frame& frame = stack.frames[i];
     if (frame.image.empty()) fail("{}: frame {} has no image", dir.string(), i);
     if (frame.image.size() != first.size() || frame.image.type() != first.type()) {
@@ -317,7 +335,8 @@ void write_stack(const fs::path& dir, const ImageStack& stack, const nlohmann::j
     }
     files.frames.push_back(std::move(name));
   }
-  if (!stack.mask.empty() && (stack.mask.type() != CV_8UC1 || stack.mask.size() != first.size())) {
+  if (write_images && !stack.mask.empty() &&
+      (stack.mask.type() != CV_8UC1 || stack.mask.size() != first.size())) {
     fail("{}: mask must be CV_8UC1 of {}, got type {} of {}", dir.string(), size_text(first),
          stack.mask.type(), size_text(stack.mask));
   }

@@ -203,8 +203,8 @@ json build_manifest(const ImageStack& stack, const StackFiles& files, const json
                    {"version", kStackFormatVersion},
                    {"software", std::string("lightstage ") + kVersion},
                    {"created", util::utc_timestamp()},
-                   {"width", stack.width()},
-                   {"height", stack.height()},
+                   {"width", files.size.width},
+                   {"height", files.size.height},
                    {"mask", files.mask.empty() ? json(nullptr) : json(files.mask)}};
   json ground_truth = json::object();
   if (!files.normals.empty()) ground_truth["normals"] = files.normals;

@@ -22,6 +22,7 @@ inline constexpr int kStackFormatVersion = 1;
 // File names of the optional parts actually written (empty = not written).
 struct StackFiles {
   std::vector<std::string> frames;
+  cv::Size size;  // of every frame
   std::string mask;
   std::string normals;
   std::string depth;

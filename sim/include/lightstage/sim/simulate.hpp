@@ -91,8 +91,13 @@ class World {
 // (from the rendering threads, so it must be thread-safe), e.g. for a
 // progress line.
 using FrameProgress = std::function<void(std::size_t frames)>;
-ImageStack simulate_stack(const Rig& rig, const SimulateOptions& options,
-                          const FrameProgress& on_frames = {});
+// Given each frame as it is rendered (from the rendering threads, one call per
+// frame at a time for each thread), with its index: a sink may write the frame
+// out and release its image, so that a stack larger than memory is simulated
+// without being held (the stack returned keeps what the sink leaves).
+using FrameSink = std::function<void(std::size_t index, Frame& frame)>;
+ImageStack simulate_stack(const Rig& rig, const SimulateOptions& options, const FrameProgress& on_frames = {},
+                          const FrameSink& sink = {});
 
 // scene_presets() (names for --help) comes from scene_file.hpp.
 

@@ -81,7 +81,9 @@ StackOutline read_stack_outline(const std::filesystem::path& dir, const LoadOpti
 // (filenames.txt, the light files, manifest.json) only once all of it is on
 // disk, so a failed write leaves the previous index whole. With
 // `write_images` false the frame images are taken to be on disk already (a
-// capture writes each as it lands) and only the other files are rewritten.
+// capture or a simulation writes each as it lands) and only the other files
+// are rewritten: the frames need their file names but not their pixels, so a
+// stack larger than memory is indexed without being held.
 void write_stack(const std::filesystem::path& dir, const ImageStack& stack,
                  const nlohmann::json& extra_manifest = nlohmann::json::object(), bool write_images = true);
 
