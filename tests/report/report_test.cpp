@@ -483,5 +483,51 @@ TEST(Report, PicturesOfAResultOverTheBudgetAreBlockMeansOfTheFullPictures) {
   }
 }
 
+TEST(Report, ABadCropOrABrokenGroundTruthInTheStackIsANoteNotAFailure) {
+  const auto dir = testing::scratch_dir();
+  const auto result = result_with_every_map(dir);
+  const auto summary_path = result / "summary.json";
+  const nlohmann::json summary = nlohmann::json::parse(testing::read_text(summary_path));
+  const auto notes_of = [&](const nlohmann::json& crop) {
+    nlohmann::json edited = summary;
+    edited["crop"] = crop;
+    std::ofstream(summary_path) << edited.dump();
+    report::ReportSummary page;
+    report::render_report(result, {}, &page);
+    std::string notes;
+    for (const auto& note : page.notes) notes += note + "\n";
+    EXPECT_EQ(std::find(page.sections.begin(), page.sections.end(), "error"), page.sections.end()) << notes;
+    return notes;
+  };
+  EXPECT_NE(notes_of({1, 2}).find("crop must be [x, y, width, height]"), std::string::npos);
+  EXPECT_NE(notes_of({0, 0, 64, 64}).find("reaches outside the stack's 32x32"), std::string::npos);
+
+  std::ofstream(summary_path) << summary.dump();
+  std::ofstream(dir / "stack" / "Normal_gt.png", std::ios::trunc) << "not a PNG";
+  report::ReportSummary page;
+  report::render_report(result, {}, &page);
+  std::string notes;
+  for (const auto& note : page.notes) notes += note + "\n";
+  EXPECT_NE(notes.find("The stack's ground truth could not be read"), std::string::npos) << notes;
+  EXPECT_NE(std::find(page.sections.begin(), page.sections.end(), "lights"), page.sections.end())
+      << "the rest of the stack's sections stay";
+}
+
+TEST(Report, TheMethodMapOverviewKeepsItsCategoriesAndPartBlocksAreDrawn) {
+  const auto dir = testing::scratch_dir();
+  const auto result = result_with_every_map(dir);
+  report::ReportOptions options;
+  options.picture_max_pixels = 121;  // 32×32 → blocks of 3×3, the last row and column of blocks partial
+  const std::string html = report::render_report(result, options);
+  const cv::Mat choices = cv::imread((result / "method_map.png").string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat overview = picture(html, "method per pixel");
+  ASSERT_EQ(overview.size(), cv::Size(11, 11));
+  ASSERT_EQ(overview.type(), CV_8UC3);
+  for (int y = 0; y < overview.rows; ++y)
+    for (int x = 0; x < overview.cols; ++x)
+      ASSERT_EQ(overview.at<cv::Vec3b>(y, x), choices.at<cv::Vec3b>(3 * y, 3 * x)) << x << "," << y;
+  EXPECT_EQ(picture(html, "normal map").size(), cv::Size(11, 11));
+}
+
 }  // namespace
 }  // namespace lightstage

@@ -117,6 +117,9 @@ nlohmann::json simulate_to_folder(const std::filesystem::path& rig_path, const s
   std::error_code error;
   std::filesystem::create_directories(out, error);
   if (error) fail("{}: cannot create folder: {}", out.string(), error.message());
+  // A stack written over (--force) stops being one first: a simulation that fails half way must not leave
+  // its index naming a mix of old and new frames.
+  std::filesystem::remove(out / "filenames.txt", error);
   // Each frame goes to its file as it is rendered: the stack is never held whole.
   cv::Size size;
   const ImageStack stack = sim::simulate_stack(rig, options, on_frames, [&](std::size_t i, Frame& frame) {

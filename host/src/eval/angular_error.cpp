@@ -85,12 +85,11 @@ void AngularErrorAccumulator::add(const cv::Mat& predicted, const cv::Mat& truth
   }
 }
 
-AngularErrorStats AngularErrorAccumulator::stats() const {
+AngularErrorStats AngularErrorAccumulator::stats() {
   AngularErrorStats stats;
   stats.missing = missing_;
   stats.count = errors_.size();
   if (!errors_.empty()) {
-    // In place (the order of the errors is nobody's concern): a copy would double the memory they take.
     std::vector<double>& errors = errors_;
     std::sort(errors.begin(), errors.end());
     stats.mean = sum_ / static_cast<double>(errors.size());

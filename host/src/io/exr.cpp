@@ -75,14 +75,15 @@ std::string read_whole_file(const std::filesystem::path& path) {
   return bytes;
 }
 
-// What a parsed header says, within the limits above.
-ExrHeader describe(const Imf::Header& header, bool tiled, const std::string& name) {
+// What a parsed header says, within the limits above: the pixel count caps an
+// image decoded whole (`whole`), not one read a band of rows at a time.
+ExrHeader describe(const Imf::Header& header, bool tiled, const std::string& name, bool whole) {
   ExrHeader out;
   const Imath::Box2i data = header.dataWindow();
   const std::int64_t width = std::int64_t{data.max.x} - data.min.x + 1;
   const std::int64_t height = std::int64_t{data.max.y} - data.min.y + 1;
   if (width < 1 || height < 1 || width > kExrMaxSide || height > kExrMaxSide ||
-      width * height > kExrMaxPixels)
+      (whole && width * height > kExrMaxPixels))
     fail("{}: EXR image is {}x{}; at most {} pixels, {} a side, are read", name, width, height, kExrMaxPixels,
          kExrMaxSide);
   out.size = cv::Size(static_cast<int>(width), static_cast<int>(height));
@@ -210,7 +211,7 @@ void ExrFile::parse_header() {
     if (in.ran_out) fail("{}: EXR header ends inside the file (truncated file)", name_);
     fail("{}: EXR header: {}", name_, e.what());
   }
-  header_ = describe(header, Imf::isTiled(version), name_);
+  header_ = describe(header, Imf::isTiled(version), name_, /*whole=*/true);
 }
 
 cv::Mat ExrFile::read(const std::vector<std::string>& channels) const {
@@ -246,7 +247,7 @@ std::unique_ptr<RowReader> open_exr_rows(const std::filesystem::path& path,
   try {
     file = std::make_unique<Imf::InputFile>(path.c_str());
     if (!file->isComplete()) fail("{}: EXR ends before its last scan line (truncated file)", path.string());
-    header = describe(file->header(), file->header().hasTileDescription(), path.string());
+    header = describe(file->header(), file->header().hasTileDescription(), path.string(), /*whole=*/false);
   } catch (const InputError&) {
     throw;
   } catch (const std::exception& e) {

@@ -108,25 +108,9 @@ void StackBands::open_frames() {
 }
 
 ImageStack StackBands::read_band(int y0, int rows) {
+  if (!opened_) open_frames();
   ImageStack band;
   band.frames = index_.frames;
-  if (options_.frame_pixels) read_frames(band, y0, rows);
-  if (!index_.mask.empty()) band.mask = index_.mask.rowRange(y0, y0 + rows).clone();
-  if (normals_ || depth_) {
-    GroundTruth truth;
-    if (normals_) {
-      cv::Mat encoded;
-      normals_->read(y0, rows, encoded);
-      truth.normals = decode_normal_map(encoded, normals_->path().string()).normals;
-    }
-    if (depth_) depth_->read(y0, rows, truth.depth);
-    band.ground_truth = std::move(truth);
-  }
-  return band;
-}
-
-void StackBands::read_frames(ImageStack& band, int y0, int rows) {
-  if (!opened_) open_frames();
   parallel_chunks(frames_.size(), options_.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       frames_[i]->read(y0, rows, band.frames[i].image);
@@ -141,6 +125,18 @@ void StackBands::read_frames(ImageStack& band, int y0, int rows) {
   }
   for (Frame& frame : band.frames)
     if (!frame.dark_file.empty()) frame.dark = darks.at(frame.dark_file);
+  if (!index_.mask.empty()) band.mask = index_.mask.rowRange(y0, y0 + rows).clone();
+  if (normals_ || depth_) {
+    GroundTruth truth;
+    if (normals_) {
+      cv::Mat encoded;
+      normals_->read(y0, rows, encoded);
+      truth.normals = decode_normal_map(encoded, normals_->path().string()).normals;
+    }
+    if (depth_) depth_->read(y0, rows, truth.depth);
+    band.ground_truth = std::move(truth);
+  }
+  return band;
 }
 
 }  // namespace lightstage::io

@@ -4,11 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace lightstage::report {
 
 int overview_factor(cv::Size size, int max_pixels) {
-  const double pixels = static_cast<double>(size.area());
+  const double pixels = static_cast<double>(size.width) * size.height;
   int factor = std::max(1, static_cast<int>(std::ceil(std::sqrt(pixels / std::max(max_pixels, 1)))));
   // The square root can round under: ceil of each side is what must fit.
   while (static_cast<double>((size.width + factor - 1) / factor) * ((size.height + factor - 1) / factor) >
@@ -17,22 +18,33 @@ int overview_factor(cv::Size size, int max_pixels) {
   return factor;
 }
 
-Overview::Overview(cv::Size size, int factor) : size_(size), factor_(std::max(factor, 1)) {}
+Overview::Overview(cv::Size size, int factor, Blocks blocks)
+    : size_(size), factor_(std::max(factor, 1)), blocks_(blocks) {}
 
 void Overview::add(const cv::Mat& band) {
-  if (band.type() != CV_8UC4 || band.cols != size_.width || rows_added_ + band.rows > size_.height)
+  const bool type_ok = blocks_ == Blocks::kMean ? band.type() == CV_8UC4 : band.depth() == CV_8U;
+  if (!type_ok || band.cols != size_.width || rows_added_ + band.rows > size_.height)
     fail("report: picture rows {}-{} do not fit its {}x{} picture", rows_added_, rows_added_ + band.rows - 1,
          size_.width, size_.height);
   if (out_.empty()) {
     // Made with the first rows: a picture the result does not have takes nothing.
     const int width = (size_.width + factor_ - 1) / factor_;
-    out_ = cv::Mat((size_.height + factor_ - 1) / factor_, width, CV_8UC4, cv::Scalar::all(0));
+    out_ = cv::Mat((size_.height + factor_ - 1) / factor_, width, band.type(), cv::Scalar::all(0));
     sums_.assign(static_cast<std::size_t>(width) * 4, 0.0);
     block_pixels_.assign(static_cast<std::size_t>(width), 0);
   }
   if (factor_ == 1) {
     band.copyTo(out_.rowRange(rows_added_, rows_added_ + band.rows));
     rows_added_ += band.rows;
+    return;
+  }
+  if (blocks_ == Blocks::kFirstPixel) {
+    for (int r = 0; r < band.rows; ++r, ++rows_added_) {
+      if (rows_added_ % factor_ != 0) continue;
+      auto* out = out_.ptr(rows_added_ / factor_);
+      for (int x = 0; x < out_.cols; ++x)
+        std::memcpy(out + x * band.elemSize(), band.ptr(r, x * factor_), band.elemSize());
+    }
     return;
   }
   for (int r = 0; r < band.rows; ++r) {

@@ -16,9 +16,13 @@ int overview_factor(cv::Size size, int max_pixels);
 
 class Overview {
  public:
-  Overview(cv::Size size, int factor);
+  // kMean: a block's mean (CV_8UC4 pictures); kFirstPixel: its first pixel,
+  // for pictures of categories, whose mean would be a colour of none (any
+  // 8-bit picture, its type kept).
+  enum class Blocks { kMean, kFirstPixel };
+  Overview(cv::Size size, int factor, Blocks blocks = Blocks::kMean);
 
-  // The next band.rows rows of the picture (CV_8UC4, the picture's width).
+  // The next band.rows rows of the picture (the picture's width).
   void add(const cv::Mat& band);
   // After every row: the overview, ceil(size / factor).
   cv::Mat finish();
@@ -30,6 +34,7 @@ class Overview {
 
   cv::Size size_;
   int factor_ = 1;
+  Blocks blocks_ = Blocks::kMean;
   int rows_added_ = 0;
   cv::Mat out_;
   std::vector<double> sums_;       // per overview pixel of the row being gathered: b, g, r, opaque count

@@ -82,8 +82,8 @@ struct Inputs {
   fs::path result_dir;
   nlohmann::json summary = nlohmann::json::object();
   std::optional<fs::path> stack_dir;
-  std::optional<ImageStack> stack;  // without ground truth
-  bool stack_has_truth = false;
+  std::optional<ImageStack> stack;  // without ground truth (read by rows: result_maps.hpp)
+  std::optional<cv::Rect> crop;     // of the stack, a `solve --crop` result's
   std::optional<calibration::LightCalibration> calibration;
   std::optional<fs::path> calibration_file;
   std::vector<std::string> notes;
@@ -106,8 +106,8 @@ class Page {
 };
 
 // A result of `solve --crop` covers summary.json's "crop" [x, y, w, h] of the
-// stack: its frames, mask and ground truth are cut to it.
-void cut_to_crop(ImageStack& stack, const nlohmann::json& crop) {
+// stack: its frames and mask are cut to it (the ground truth as it is read). Returns the region.
+cv::Rect cut_to_crop(ImageStack& stack, const nlohmann::json& crop) {
   if (!crop.is_array() || crop.size() != 4 ||
       !std::all_of(crop.begin(), crop.end(), [](const auto& v) { return v.is_number_integer(); }))
     fail("summary.json: crop must be [x, y, width, height], got {}", crop.dump());
@@ -123,7 +123,8 @@ void cut_to_crop(ImageStack& stack, const nlohmann::json& crop) {
     cut(frame.image, "frames");
     cut(frame.dark, "dark frames");
   }
-  cut(stack.mask, "mask");  // the ground truth is read a band at a time, cut as it is read
+  cut(stack.mask, "mask");
+  return region;
 }
 
 void load_inputs(Inputs& in, const io::SolveFolder& folder, const ReportOptions& options) {
@@ -159,9 +160,10 @@ void load_inputs(Inputs& in, const io::SolveFolder& folder, const ReportOptions&
     load.load_ground_truth = false;  // read a band at a time (result_maps.hpp)
     try {
       in.stack = io::load_stack(*in.stack_dir, load);
-      in.stack_has_truth = fs::exists(*in.stack_dir / "Normal_gt.png");
-      if (const auto crop = in.summary.find("crop"); crop != in.summary.end()) cut_to_crop(*in.stack, *crop);
+      if (const auto crop = in.summary.find("crop"); crop != in.summary.end())
+        in.crop = cut_to_crop(*in.stack, *crop);
     } catch (const InputError& e) {
+      in.stack.reset();
       if (options.stack) throw;
       in.notes.push_back(
           fmt::format("The input stack could not be read ({}); its sections are omitted.", e.what()));
@@ -531,8 +533,7 @@ std::string error_section(const ErrorPictures& error, const std::string& source)
 }
 
 // Ground-truth normals and the mask to compare in, from --gt or the stack; none without either.
-std::unique_ptr<TruthRows> ground_truth(const Inputs& in, const ReportOptions& options,
-                                        cv::Size result_size) {
+std::unique_ptr<TruthRows> ground_truth(Inputs& in, const ReportOptions& options, cv::Size result_size) {
   std::unique_ptr<TruthRows> truth;
   cv::Mat mask;
   if (options.ground_truth) {
@@ -542,11 +543,15 @@ std::unique_ptr<TruthRows> ground_truth(const Inputs& in, const ReportOptions& o
       file /= "Normal_gt.png";
     }
     truth = truth_from_file(file);
-  } else if (in.stack && in.stack_has_truth) {
-    cv::Rect crop;
-    if (const auto it = in.summary.find("crop"); it != in.summary.end())
-      crop = cv::Rect((*it)[0].get<int>(), (*it)[1].get<int>(), (*it)[2].get<int>(), (*it)[3].get<int>());
-    truth = truth_from_stack(*in.stack_dir, crop);
+  } else if (in.stack && fs::exists(*in.stack_dir / "Normal_gt.png")) {
+    try {
+      truth = truth_from_file(*in.stack_dir / "Normal_gt.png", in.crop);
+    } catch (const InputError& e) {
+      if (options.stack) throw;
+      in.notes.push_back(
+          fmt::format("The stack's ground truth could not be read ({}); no error map.", e.what()));
+      return nullptr;
+    }
     mask = in.stack->mask;
   } else {
     return nullptr;
@@ -572,8 +577,9 @@ void ReportOptions::check() const {
 }
 
 std::size_t report_memory_bytes(int width, int height, const ReportOptions& options) {
-  // Held for the whole image: the solved mask, the ground truth's mask, a double per compared pixel.
-  constexpr std::size_t kWholeImageBytes = 1 + 1 + 8;
+  // Held for the whole image: the solved mask, the ground truth's mask, a double per compared pixel in a
+  // growing vector (up to three while it moves).
+  constexpr std::size_t kWholeImageBytes = 1 + 1 + 24;
   // Per picture pixel: eight BGRA pictures, their PNGs and base64 in the page, and the page's copy.
   constexpr std::size_t kPictureBytes = 48;
   // Per viewer pixel: its model (normals, albedo, chroma, up to 10 coefficients) and its payload.
@@ -613,6 +619,8 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
   if (options.depth)
     depth_file = fs::is_directory(*options.depth) ? *options.depth / "depth.pfm" : *options.depth;
   DepthUnit depth_unit;
+  // Notes in the order of the page's sections: the viewer's (drawn with the maps) come first.
+  std::vector<std::string> depth_notes, method_notes;
   if (fs::exists(depth_file)) {
     DepthSource depth;
     depth.rows = io::open_row_reader(depth_file);
@@ -623,8 +631,8 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
             "{}x{}",
             depth_file.string(), size.width, size.height, CV_MAT_CN(depth.rows->type()),
             depth.rows->size().width, depth.rows->size().height);
-      in.notes.push_back(fmt::format("{} is not one float channel of the normal map's size; not shown.",
-                                     depth_file.string()));
+      depth_notes.push_back(fmt::format("{} is not one float channel of the normal map's size; not shown.",
+                                        depth_file.string()));
     } else {
       depth_unit = depth_camera(depth_file.parent_path(), depth);
       sources.depth = std::move(depth);
@@ -632,7 +640,7 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
   } else if (options.depth) {
     fail("--depth {}: no depth.pfm there", options.depth->string());
   } else {
-    in.notes.push_back(
+    depth_notes.push_back(
         "No depth.pfm in the result folder (run `lightstage integrate`, then give its folder with --depth): "
         "no depth "
         "relief.");
@@ -646,18 +654,18 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
     } catch (const InputError&) {
     }
     if (!sources.method_map || sources.method_map->type() != CV_8UC3 || sources.method_map->size() != size) {
-      in.notes.push_back("method_map.png: not an image of the result's size; not shown.");
+      method_notes.push_back("method_map.png: not an image of the result's size; not shown.");
       sources.method_map.reset();
     }
   }
 
   sources.truth = ground_truth(in, options, size);
   const ResultPictures pictures = draw_result_maps(sources, in.notes);
+  in.notes.insert(in.notes.end(), depth_notes.begin(), depth_notes.end());
   if (pictures.factor > 1)
     in.notes.push_back(
         fmt::format("The pictures show the {}x{} result at 1/{} of its size, each pixel the mean of {}x{} "
-                    "(page budget {} "
-                    "pixels a picture).",
+                    "(the method map: the block's first pixel; page budget {} pixels a picture).",
                     size.width, size.height, pictures.factor, pictures.factor, pictures.factor,
                     options.picture_max_pixels));
 
@@ -682,6 +690,7 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
         "found.");
   }
 
+  in.notes.insert(in.notes.end(), method_notes.begin(), method_notes.end());
   if (const std::string html = residual_section(in, pictures); !html.empty())
     page.section("residual", "Residual and confidence", html);
   else

@@ -2,7 +2,6 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/solve_output_writer.hpp"
-#include "lightstage/host/io/stack_bands.hpp"
 #include "report/maps.hpp"
 #include "report/overview.hpp"
 
@@ -16,39 +15,27 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// A Normal_gt.png's rows, cut to `region` of it.
 class FileTruth final : public TruthRows {
  public:
-  explicit FileTruth(const fs::path& file) : rows_(io::open_row_reader(file)) { source = file.string(); }
-  cv::Size size() const override { return rows_->size(); }
+  FileTruth(const fs::path& file, std::optional<cv::Rect> region) : rows_(io::open_row_reader(file)) {
+    source = file.string();
+    region_ = region.value_or(cv::Rect({0, 0}, rows_->size()));
+    if ((region_ & cv::Rect({0, 0}, rows_->size())) != region_)
+      fail("summary.json: crop [{}, {}, {}, {}] reaches outside the stack's {}x{} ground truth", region_.x,
+           region_.y, region_.width, region_.height, rows_->size().width, rows_->size().height);
+  }
+  cv::Size size() const override { return region_.size(); }
   io::DecodedNormals read(int y0, int rows) override {
     cv::Mat encoded;
-    rows_->read(y0, rows, encoded);
-    return io::decode_normal_map(encoded, rows_->path().string());
+    rows_->read(region_.y + y0, rows, encoded);
+    return io::decode_normal_map(encoded.colRange(region_.x, region_.x + region_.width),
+                                 rows_->path().string());
   }
 
  private:
   std::unique_ptr<io::RowReader> rows_;
-};
-
-class StackTruth final : public TruthRows {
- public:
-  StackTruth(std::unique_ptr<io::StackBands> stack, const cv::Rect& crop)
-      : stack_(std::move(stack)), crop_(crop.empty() ? cv::Rect({0, 0}, stack_->size()) : crop) {}
-  cv::Size size() const override { return crop_.size(); }
-  io::DecodedNormals read(int y0, int rows) override {
-    ImageStack band = stack_->read_band(crop_.y + y0, rows);
-    io::DecodedNormals truth;
-    truth.normals = band.ground_truth->normals.colRange(crop_.x, crop_.x + crop_.width).clone();
-    truth.valid = cv::Mat(truth.normals.size(), CV_8UC1, cv::Scalar(0));
-    for (int y = 0; y < truth.normals.rows; ++y)
-      for (int x = 0; x < truth.normals.cols; ++x)
-        if (cv::norm(truth.normals.at<cv::Vec3f>(y, x)) > 0) truth.valid.at<std::uint8_t>(y, x) = 255;
-    return truth;
-  }
-
- private:
-  std::unique_ptr<io::StackBands> stack_;
-  cv::Rect crop_;
+  cv::Rect region_;
 };
 
 // The finite values of `values` where `valid` is nonzero, in row order.
@@ -96,16 +83,8 @@ cv::Mat usable_depth(const cv::Mat& depth, const cv::Mat& solved) {
 
 }  // namespace
 
-std::unique_ptr<TruthRows> truth_from_file(const fs::path& file) { return std::make_unique<FileTruth>(file); }
-
-std::unique_ptr<TruthRows> truth_from_stack(const fs::path& stack_dir, const cv::Rect& crop) {
-  io::LoadOptions options;
-  options.min_images = 1;
-  options.frame_pixels = false;
-  auto stack = std::make_unique<io::StackBands>(stack_dir, options);
-  auto truth = std::make_unique<StackTruth>(std::move(stack), crop);
-  truth->source = (stack_dir / "Normal_gt.png").string();
-  return truth;
+std::unique_ptr<TruthRows> truth_from_file(const fs::path& file, std::optional<cv::Rect> region) {
+  return std::make_unique<FileTruth>(file, region);
 }
 
 ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& notes) {
@@ -187,7 +166,8 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   out.factor = overview_factor(size, sources.picture_max_pixels);
   const auto overview = [&] { return Overview(size, out.factor); };
   Overview normals = overview(), albedo = overview(), shaded = overview(), depth_colour = overview(),
-           residual = overview(), confidence = overview(), method_map = overview(), error_map = overview();
+           residual = overview(), confidence = overview(), error_map = overview();
+  Overview method_map(size, out.factor, Overview::Blocks::kFirstPixel);
   out.colour_albedo = folder.has_albedo() && folder.has_chroma();
   out.albedo_shown = sources.albedo_scale > 0 ? sources.albedo_scale : std::max(albedo_q.value(), 1e-12);
   out.residual_high = nice_ceiling(residual_q.value());
@@ -231,9 +211,7 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
       try {
         cv::Mat choices;
         sources.method_map->read(y0, rows, choices);
-        cv::Mat bgra;
-        cv::cvtColor(choices, bgra, cv::COLOR_BGR2BGRA);
-        method_map.add(bgra);
+        method_map.add(choices);
       } catch (const InputError& e) {
         notes.push_back(fmt::format("method_map.png: {}; not shown.", e.what()));
         method_map_ok = false;

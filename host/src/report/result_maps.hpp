@@ -6,7 +6,7 @@
 // are scaled by, a second gathers those quantiles exactly (io::BandQuantile),
 // a third draws every picture into its overview (overview.hpp). Held for the
 // whole image: the solved mask and the ground truth's mask (a byte a pixel)
-// and the compared pixels' errors (8 bytes each).
+// and the compared pixels' errors (a double each, in a vector that grows).
 
 #include "lightstage/host/eval/angular_error.hpp"
 #include "lightstage/host/io/normal_map.hpp"
@@ -38,10 +38,10 @@ class TruthRows {
   std::string source;  // named in the page
 };
 
-// A Normal_gt.png (project encoding).
-std::unique_ptr<TruthRows> truth_from_file(const std::filesystem::path& file);
-// The Normal_gt.png of a stack folder, cut to `crop` (x, y, w, h; empty: whole).
-std::unique_ptr<TruthRows> truth_from_stack(const std::filesystem::path& stack_dir, const cv::Rect& crop);
+// A Normal_gt.png (project encoding), cut to `region` of it when given (a
+// `solve --crop` result's region of its stack; one reaching outside it is refused).
+std::unique_ptr<TruthRows> truth_from_file(const std::filesystem::path& file,
+                                           std::optional<cv::Rect> region = std::nullopt);
 
 // How depth.pfm is drawn: its unit per pixel comes from the integration's camera.
 struct DepthSource {

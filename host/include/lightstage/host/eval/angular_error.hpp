@@ -44,10 +44,10 @@ class AngularErrorAccumulator {
   // As angular_error; with `map` (sized like `truth`) also fills its degrees and valid maps.
   void add(const cv::Mat& predicted, const cv::Mat& truth, const cv::Mat& mask = {},
            AngularErrorMap* map = nullptr);
-  AngularErrorStats stats() const;
+  AngularErrorStats stats();  // sorts the errors gathered (in place: a copy would double them)
 
  private:
-  mutable std::vector<double> errors_;  // sorted by stats()
+  std::vector<double> errors_;
   double sum_ = 0;
   std::size_t missing_ = 0;
 };

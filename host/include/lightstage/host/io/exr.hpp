@@ -76,9 +76,10 @@ cv::Mat read_exr(const std::filesystem::path& path, const std::vector<std::strin
 
 class RowReader;
 // The named channels read a band of rows at a time (row_reader.hpp), decoded
-// from the file on disk as the rows are asked for: never held whole. The same
-// checks and errors as ExrFile::read; a file that does not decode at some rows
-// is found when they are read.
+// from the file on disk as the rows are asked for: never held whole, so only
+// the per-side limit applies, not kExrMaxPixels. The channel checks and
+// errors of ExrFile::read; a file that does not decode at some rows is found
+// when they are read.
 std::unique_ptr<RowReader> open_exr_rows(const std::filesystem::path& path,
                                          const std::vector<std::string>& channels);
 

@@ -44,10 +44,8 @@ class StackBands {
   const ImageStack& index() const { return index_; }
   cv::Size size() const { return size_; }
   int type() const { return type_; }  // the frames' OpenCV type
-  bool has_ground_truth_normals() const { return normals_ != nullptr; }
 
-  // Rows [y0, y0 + rows) of the stack (without the frames' pixels when the
-  // options say frame_pixels = false: then only mask and ground truth). Throws InputError naming the file for
+  // Rows [y0, y0 + rows) of the stack. Throws InputError naming the file for
   // a frame of another size or type than the first (first call), rows
   // outside the images, a file that fails to decode there, or a float pixel
   // that is not finite (named by its place in the whole image).
@@ -55,7 +53,6 @@ class StackBands {
 
  private:
   void open_frames();
-  void read_frames(ImageStack& band, int y0, int rows);
 
   std::filesystem::path dir_;
   LoadOptions options_;
