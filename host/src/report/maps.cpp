@@ -142,18 +142,6 @@ cv::Mat shaded_depth(const cv::Mat& depth, const cv::Mat& valid, double pixel_si
   return out;
 }
 
-double quantile(const cv::Mat& values, const cv::Mat& valid, double q) {
-  std::vector<float> v;
-  for (int y = 0; y < values.rows; ++y)
-    for (int x = 0; x < values.cols; ++x)
-      if (is_valid(valid, y, x) && std::isfinite(values.at<float>(y, x))) v.push_back(values.at<float>(y, x));
-  if (v.empty()) return 0;
-  const auto index =
-      static_cast<std::size_t>(std::floor(std::clamp(q, 0.0, 1.0) * static_cast<double>(v.size() - 1)));
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(index), v.end());
-  return v[index];
-}
-
 double nice_ceiling(double value) {
   if (!(value > 0) || !std::isfinite(value)) return 1.0;
   const double power = std::pow(10.0, std::floor(std::log10(value)));

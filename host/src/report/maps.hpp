@@ -37,9 +37,6 @@ cv::Mat grey(const cv::Mat& values, const cv::Mat& valid, double scale);
 // normals from central differences with `pixel_size` depth units per pixel.
 cv::Mat shaded_depth(const cv::Mat& depth, const cv::Mat& valid, double pixel_size);
 
-// The `q`-quantile (0..1) of the finite values of `values` where `valid` is nonzero; 0 if none.
-double quantile(const cv::Mat& values, const cv::Mat& valid, double q);
-
 // A round number ≥ value (1, 2, 2.5 or 5 times a power of ten); 1 for value ≤ 0.
 double nice_ceiling(double value);
 

@@ -58,6 +58,7 @@ class MapQuantile {
     quantile_.count(v.data(), v.size());
   }
   void locate() { found_ = quantile_.locate(q_); }
+  bool located() const { return found_; }
   void gather(const cv::Mat& values, const cv::Mat& valid) {
     if (!found_) return;
     const auto v = valid_values(values, valid);
@@ -145,22 +146,25 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   out.viewer = viewer.finish();
   for (MapQuantile* q : {&albedo_q, &residual_q, &depth_median, &error_q}) q->locate();
 
-  // Pass 2: the quantiles gathered.
-  for_each_band([&](int y0, int rows) {
-    const io::SolveFolder band = folder.read(y0, rows);
-    if (scale_albedo) albedo_q.gather(band.albedo, band.solved);
-    if (!band.residual.empty()) residual_q.gather(band.residual, band.solved);
-    if (sources.depth && sources.depth->focal_px > 0) {
-      cv::Mat depth;
-      sources.depth->rows->read(y0, rows, depth);
-      depth_median.gather(depth, usable_depth(depth, band.solved));
-    }
-    if (sources.truth) {
-      AngularErrorAccumulator again;
-      const AngularErrorMap map = error_rows(band, y0, rows, again);
-      error_q.gather(map.degrees, map.valid);
-    }
-  });
+  // Pass 2: the quantiles gathered (none to gather: no second read).
+  const bool gather =
+      albedo_q.located() || residual_q.located() || depth_median.located() || error_q.located();
+  if (gather)
+    for_each_band([&](int y0, int rows) {
+      const io::SolveFolder band = folder.read(y0, rows);
+      if (scale_albedo) albedo_q.gather(band.albedo, band.solved);
+      if (!band.residual.empty()) residual_q.gather(band.residual, band.solved);
+      if (sources.depth && sources.depth->focal_px > 0) {
+        cv::Mat depth;
+        sources.depth->rows->read(y0, rows, depth);
+        depth_median.gather(depth, usable_depth(depth, band.solved));
+      }
+      if (sources.truth) {
+        AngularErrorAccumulator again;
+        const AngularErrorMap map = error_rows(band, y0, rows, again);
+        error_q.gather(map.degrees, map.valid);
+      }
+    });
 
   // Pass 3: every picture drawn.
   out.factor = overview_factor(size, sources.picture_max_pixels);
