@@ -281,5 +281,65 @@ TEST(RelightingFit, BadOptionsAndMapsAreNamed) {
                InputError);
 }
 
+// Rows [y0, y0 + rows) of observations of every pixel (distant lights), as a stack read in bands gives them.
+Observations band_of(const Observations& all, int y0, int rows) {
+  Observations band;
+  band.size = {all.size.width, rows};
+  band.mask = all.mask.empty() ? cv::Mat() : all.mask.rowRange(y0, y0 + rows).clone();
+  band.lights = all.lights;
+  band.origin = {0, y0};
+  band.whole_size = all.size;
+  std::vector<Eigen::Index> kept;
+  for (std::size_t p = 0; p < all.pixel_count(); ++p) {
+    const cv::Point at = all.pixels[p];
+    if (at.y < y0 || at.y >= y0 + rows) continue;
+    if (band.pixels.empty()) band.first_pixel = p;
+    band.pixels.emplace_back(at.x, at.y - y0);
+    kept.push_back(static_cast<Eigen::Index>(p));
+  }
+  band.intensities = all.intensities(kept, Eigen::all);
+  if (all.saturated.size() != 0) band.saturated = all.saturated(kept, Eigen::all);
+  return band;
+}
+
+TEST(RelightingFit, FittedBandByBandItGivesTheWholeImagesFitFloatForFloat) {
+  Eigen::VectorXd c(9);
+  c << 0.9, 0.0, 0.1, 0.2, 0.0, 0.0, 0.3, 0.0, 0.0;
+  const auto scene = biquadratic_scene(hemisphere_lights(40, 3, 0.2), cv::Size(9, 7), c, 0.5 * c);
+  cv::Mat solved = all_solved(scene.observations.size);
+  solved.at<std::uint8_t>(2, 3) = 0;  // unsolved pixels are neither sampled nor refitted
+  RelightingFitOptions options;
+  options.sample_pixels = 20;  // fewer than the pixels: an evenly spread sample across the bands
+  const RelightingFit whole = fit_relighting_brdf(scene.observations, scene.truth, solved, options);
+
+  const int band_rows = 3;
+  RelightingSample sample(count_refittable_pixels(scene.truth, solved), options);
+  EXPECT_EQ(sample.total(), 62u);
+  for (int y0 = 0; y0 < 7; y0 += band_rows) {
+    const int rows = std::min(band_rows, 7 - y0);
+    sample.add(band_of(scene.observations, y0, rows), scene.truth.rowRange(y0, y0 + rows),
+               solved.rowRange(y0, y0 + rows));
+  }
+  EXPECT_EQ(sample.size(), 20u);
+  RelightingFit banded = fit_relighting_model(sample, options);
+  cv::Mat coefficients;
+  for (int y0 = 0; y0 < 7; y0 += band_rows) {
+    const int rows = std::min(band_rows, 7 - y0);
+    coefficients.push_back(refit_coefficients(band_of(scene.observations, y0, rows),
+                                              scene.truth.rowRange(y0, y0 + rows),
+                                              solved.rowRange(y0, y0 + rows), banded, options, {}));
+  }
+  EXPECT_EQ(banded.to_json(), whole.to_json());
+  ASSERT_EQ(coefficients.type(), whole.coefficients.type());
+  EXPECT_EQ(cv::norm(coefficients.reshape(1), whole.coefficients.reshape(1), cv::NORM_INF), 0);
+
+  // A sample not shown every pixel it was made for is refused, as is one shown more.
+  RelightingSample partial(62, options);
+  partial.add(band_of(scene.observations, 0, 3), scene.truth.rowRange(0, 3), solved.rowRange(0, 3));
+  EXPECT_THROW(fit_relighting_model(partial, options), InputError);
+  RelightingSample small(10, options);
+  EXPECT_THROW(small.add(scene.observations, scene.truth, solved), InputError);
+}
+
 }  // namespace
 }  // namespace lightstage

@@ -4,11 +4,13 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/exr.hpp"
+#include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/io/stack_io.hpp"
 #include "lightstage/pipeline/memory_budget.hpp"
 #include "lightstage/pipeline/simulate_folder.hpp"
 #include "lightstage/pipeline/solve_folder.hpp"
+#include "lightstage/pipeline/solve_methods.hpp"
 #include "lightstage/testing/errors.hpp"
 #include "lightstage/testing/light_statistics.hpp"
 #include "lightstage/testing/paths.hpp"
@@ -48,9 +50,10 @@ SolveSettings settings_for(const std::string& method, const std::string& memory_
   return s;
 }
 
-// A --memory-limit that gives `stack` bands of `rows` rows.
-std::string limit_for_rows(const fs::path& stack, int rows) {
-  const BandPlan whole = plan_bands(io::read_stack_outline(stack), std::numeric_limits<std::size_t>::max());
+// A --memory-limit that gives `stack` solved with `method` bands of `rows` rows.
+std::string limit_for_rows(const fs::path& stack, int rows, const std::string& method = "l2") {
+  const BandPlan whole = plan_bands(io::read_stack_outline(stack), std::numeric_limits<std::size_t>::max(),
+                                    coefficient_terms(method));
   return std::to_string(whole.fixed_bytes + static_cast<std::size_t>(rows) * whole.row_bytes);
 }
 
@@ -64,7 +67,7 @@ void expect_same_map(const cv::Mat& a, const cv::Mat& b, const std::string& what
 void expect_bands_equal_whole(const fs::path& stack, SolveSettings settings, const fs::path& out) {
   const std::string name = settings.method;
   const SolveReport whole = solve_folder(stack, settings, out / (name + "_whole"));
-  settings.memory_limit = limit_for_rows(stack, 5);
+  settings.memory_limit = limit_for_rows(stack, 5, settings.method);
   const SolveReport banded = solve_folder(stack, settings, out / (name + "_bands"));
   SCOPED_TRACE(name);
   EXPECT_FALSE(whole.summary.contains("bands"));
@@ -74,9 +77,14 @@ void expect_bands_equal_whole(const fs::path& stack, SolveSettings settings, con
   for (const char* key : {"pixels_in_mask", "pixels_solved", "pixels_rejected_too_few_observations",
                           "pixels_rejected_degenerate", "lights", "radiometry"})
     EXPECT_EQ(banded.summary[key], whole.summary[key]) << key;
-  EXPECT_EQ(banded.summary["parameters"]["shadow_threshold_choice"],
-            whole.summary["parameters"]["shadow_threshold_choice"]);
+  // Every parameter (the threshold chosen, the fall-off estimated), fact and the reflectance with its refit.
+  EXPECT_EQ(banded.summary["parameters"], whole.summary["parameters"]);
   EXPECT_EQ(banded.summary["facts"], whole.summary["facts"]);
+  EXPECT_EQ(banded.summary.value("reflectance", nlohmann::json()),
+            whole.summary.value("reflectance", nlohmann::json()));
+  EXPECT_EQ(banded.summary.value("method_map", nlohmann::json()),
+            whole.summary.value("method_map", nlohmann::json()));
+  EXPECT_EQ(banded.summary["files"], whole.summary["files"]);
   ASSERT_TRUE(whole.error && banded.error);
   EXPECT_EQ(banded.error->mean, whole.error->mean);
   EXPECT_EQ(banded.error->median, whole.error->median);
@@ -88,6 +96,16 @@ void expect_bands_equal_whole(const fs::path& stack, SolveSettings settings, con
     expect_same_map(io::read_pfm(b / file), io::read_pfm(a / file), file);
   if (fs::exists(a / "albedo_rgb.pfm"))
     expect_same_map(io::read_pfm(b / "albedo_rgb.pfm"), io::read_pfm(a / "albedo_rgb.pfm"), "albedo_rgb.pfm");
+  for (const auto& file : whole.summary["files"].value("brdf", nlohmann::json::array())) {
+    const std::string brdf = file.get<std::string>();
+    expect_same_map(io::read_pfm(b / brdf), io::read_pfm(a / brdf), brdf);
+  }
+  if (fs::exists(a / "method_map.png"))
+    expect_same_map(io::read_image(b / "method_map.png"), io::read_image(a / "method_map.png"),
+                    "method_map.png");
+  // Nothing left behind but the solve folder's own files (the refit's spill goes).
+  for (const auto& entry : fs::directory_iterator(b))
+    EXPECT_NE(entry.path().filename().string().front(), '.') << entry.path();
   lightstage::testing::expect_same_light_statistics(whole.summary, banded.summary);
   // The report shows them without decoding the stack again.
   EXPECT_NE(lightstage::testing::read_text(b / "report.html").find("<section id=\"light-statistics\">"),
@@ -102,6 +120,26 @@ TEST(SolveBands, EveryMethodThatSolvesInBandsGivesTheWholeImageResult) {
     expect_bands_equal_whole(stack, settings_for(method, "auto"), dir);
 }
 
+TEST(SolveBands, TheBiPolynomialMethodsAndAutoRefitTheirRelightingOverTheWholeObject) {
+  const fs::path dir = lightstage::testing::scratch_dir();
+  // Colour, near LEDs and a highlight sharp enough for the refit's specular lobe.
+  const fs::path shiny = simulated(dir / "shiny", "shiny-sphere", "0.9,0.6,0.3");
+  for (const char* method : {"biquadratic", "auto"})
+    expect_bands_equal_whole(shiny, settings_for(method, "auto"), dir / "shiny-out");
+  const auto reflectance = nlohmann::json::parse(lightstage::testing::read_text(
+      dir / "shiny-out" / "biquadratic_bands" / "summary.json"))["reflectance"];
+  EXPECT_GT(reflectance["fit"]["pixels"].get<int>(), 500);
+  EXPECT_TRUE(reflectance.contains("specular")) << reflectance.dump();
+  const fs::path bumps = simulated(dir / "bumps", "bumps");
+  for (const char* method : {"bilinear", "bicubic"})
+    expect_bands_equal_whole(bumps, settings_for(method, "auto"), dir / "bumps-out");
+  // The fall-off κ the azimuth's biquadratic solve estimates: from every band, as whole.
+  SolveSettings monotonic = settings_for("monotonic", "auto");
+  monotonic.azimuth_from = "biquadratic";
+  monotonic.resolve();
+  expect_bands_equal_whole(bumps, monotonic, dir / "bumps-out");
+}
+
 TEST(SolveBands, RandomSeedsAndColourFollowThePixelsPlaceInTheWholeImage) {
   const fs::path dir = lightstage::testing::scratch_dir();
   const fs::path stack = simulated(dir / "stack", "sphere", "0.9,0.6,0.3");
@@ -114,11 +152,11 @@ TEST(SolveBands, RandomSeedsAndColourFollowThePixelsPlaceInTheWholeImage) {
 TEST(SolveBands, MethodsThatNeedTheWholeImageAndLimitsTooSmallAreRefused) {
   const fs::path dir = lightstage::testing::scratch_dir();
   const fs::path stack = simulated(dir / "stack", "sphere");
-  const std::string error = error_of(
-      [&] { solve_folder(stack, settings_for("biquadratic", limit_for_rows(stack, 5)), dir / "bq"); });
-  EXPECT_THAT(error, HasSubstr("--method biquadratic needs the whole image"));
-  EXPECT_THAT(error, HasSubstr("l2, robust, monotonic, l1, sbl"));
-  EXPECT_FALSE(fs::exists(dir / "bq" / "summary.json"));
+  const std::string error =
+      error_of([&] { solve_folder(stack, settings_for("rpca", limit_for_rows(stack, 5)), dir / "rpca"); });
+  EXPECT_THAT(error, HasSubstr("--method rpca needs the whole image"));
+  EXPECT_THAT(error, HasSubstr("l2, robust, monotonic, l1, sbl, bilinear, biquadratic, bicubic, auto"));
+  EXPECT_FALSE(fs::exists(dir / "rpca" / "summary.json"));
   EXPECT_THAT(error_of([&] { solve_folder(stack, settings_for("l2", "4K"), dir / "small"); }),
               HasSubstr("--memory-limit 4.1 kB: too small for this stack (40x36"));
 }

@@ -122,6 +122,11 @@ TEST(SolveTiles, WhatWouldMixRunsIsRefusedByName) {
               HasSubstr("more tiles than the image has rows (37)"));
   EXPECT_THAT(error_of([&] { solve_tile(stack, settings_for("biquadratic", stack, 5), out, {}, "0/2"); }),
               HasSubstr("--method biquadratic needs the whole image"));
+  // Its fall-off is estimated over the whole object, which no tile job sees.
+  SolveSettings azimuth = settings_for("monotonic", stack, 5);
+  azimuth.azimuth_from = "bilinear";
+  EXPECT_THAT(error_of([&] { solve_tile(stack, azimuth, out, {}, "0/2"); }),
+              HasSubstr("--method monotonic needs the whole image"));
   EXPECT_THAT(error_of([&] { solve_tile(stack, robust, out, {}, "merge"); }),
               HasSubstr("no tile parts to merge"));
 

@@ -6,6 +6,8 @@
 #include "lightstage/common/log.hpp"
 #include "lightstage/host/io/solve_output.hpp"
 #include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/solvers/auto.hpp"
+#include "lightstage/host/solvers/bipolynomial.hpp"
 #include "lightstage/pipeline/memory_budget.hpp"
 #include "lightstage/pipeline/solve_folder.hpp"
 
@@ -39,6 +41,7 @@ void BandResults::add(const SolveResult& band, int y0) {
     whole_.choices = band.choices;
     whole_.summary.method = band.summary.method;
     whole_.summary.settings = band.summary.settings;
+    whole_.summary.findings = band.summary.findings;  // their order; the values are merged
     started_ = true;
   }
   if (keep_maps_) paste_maps(band, y0);
@@ -53,8 +56,14 @@ void BandResults::add(const SolveResult& band, int y0) {
     facing_away_ += f->value.get<std::size_t>();
   // A band's mean of whole iteration counts gives back its total exactly, so the mean over all bands is
   // the whole image's to the last bit.
-  if (const SolveFact* f = find_fact(b.settings, "iterations"))
-    iterations_ += std::round(f->value.get<double>() * static_cast<double>(b.pixels_solved));
+  const auto total = [&](const SolveFact& f) {
+    return std::round(f.value.get<double>() * static_cast<double>(b.pixels_solved));
+  };
+  if (const SolveFact* f = find_fact(b.settings, "iterations")) iterations_ += total(*f);
+  if (const SolveFact* f = find_fact(b.findings, "mean_iterations")) mean_iterations_ += total(*f);
+  if (const SolveFact* f = find_fact(b.findings, "method_counts"))
+    for (const auto& [name, count] : f->value.items())
+      method_counts_[name] = method_counts_.value(name, std::size_t{0}) + count.get<std::size_t>();
 }
 
 void BandResults::paste_maps(const SolveResult& band, int y0) {
@@ -74,11 +83,17 @@ SolveResult BandResults::finish() {
     *map = cv::Mat(size_, type, cv::Scalar::all(0));
   }
   SolveSummary& s = whole_.summary;
-  s.findings = {facing_away_fact(facing_away_)};
+  const auto mean = [&](double sum) {
+    return s.pixels_solved > 0 ? sum / static_cast<double>(s.pixels_solved) : 0.0;
+  };
+  for (SolveFact& fact : s.findings) {
+    if (fact.key == "normals_facing_away") fact = facing_away_fact(facing_away_);
+    if (fact.key == "mean_iterations") fact = mean_iterations_fact(mean(mean_iterations_));
+    if (fact.key == "method_counts") fact = method_counts_fact(method_counts_, s.pixels_solved);
+  }
+  if (!find_fact(s.findings, "normals_facing_away")) s.findings.push_back(facing_away_fact(facing_away_));
   for (SolveFact& fact : s.settings) {
-    if (fact.key == "iterations")
-      fact = iterations_per_pixel_fact(
-          s.pixels_solved > 0 ? iterations_ / static_cast<double>(s.pixels_solved) : 0.0);
+    if (fact.key == "iterations") fact = iterations_per_pixel_fact(mean(iterations_));
   }
   s.message = s.format_message();
   return std::move(whole_);
@@ -145,21 +160,36 @@ ShadowThreshold BandSolver::shadow_threshold() {
   return samples.estimate(source);
 }
 
+const SolvePlan& BandSolver::plan_band(ImageStack& band, Observations& observations,
+                                       const ShadowThreshold& threshold) {
+  const nlohmann::json model =
+      set_light_model(input_, band, applied_, calibration_, observations, /*warn=*/light_model_.is_null());
+  if (light_model_.is_null()) light_model_ = model;
+  if (!solve_plan_) solve_plan_ = plan_solve(observations, settings_, threshold);
+  return *solve_plan_;
+}
+
+void BandSolver::estimate_falloff(const ShadowThreshold& threshold) {
+  if (!falloff_estimating_options(settings_)) return;
+  FalloffSamples samples(mask_pixels(0, size().height));
+  for_each_band(0, size().height, [&](ImageStack& band, Observations& observations, int) {
+    const SolvePlan& plan = plan_band(band, observations, threshold);
+    samples.add(observations, *falloff_estimating_options(plan.settings));  // with the plan's threshold
+  });
+  if (solve_plan_) use_falloff_estimate(solve_plan_->settings, samples.estimate());
+}
+
 SolveResult BandSolver::solve_rows(int begin, int end, const ShadowThreshold& threshold,
                                    AngularErrorAccumulator& error, bool& has_ground_truth,
                                    const BandSink& sink) {
-  std::optional<SolvePlan> solve_plan;
   BandResults results({size().width, end - begin}, /*keep_maps=*/false);
   for_each_band(begin, end, [&](ImageStack& band, Observations& observations, int y0) {
-    const nlohmann::json model =
-        set_light_model(input_, band, applied_, calibration_, observations, /*warn=*/light_model_.is_null());
-    if (light_model_.is_null()) light_model_ = model;
-    if (!solve_plan) solve_plan = plan_solve(observations, settings_, threshold);
+    const SolvePlan& plan = plan_band(band, observations, threshold);
     if (observations.pixel_count() == 0) {
       sink(SolveResult{}, observations.size.height);
       return;
     }
-    const SolveResult result = solve_planned(observations, *solve_plan, /*refit_relighting=*/false);
+    const SolveResult result = solve_planned(observations, plan, /*refit_relighting=*/false);
     results.add(result, y0 - begin);
     sink(result, observations.size.height);
     if (!light_statistics_)
@@ -171,6 +201,38 @@ SolveResult BandSolver::solve_rows(int begin, int end, const ShadowThreshold& th
     }
   });
   return results.finish();
+}
+
+void BandSolver::refit_relighting(BandSpill& spill, std::size_t refittable, SolveResult& result,
+                                  const BandSink& sink) {
+  const RelightingFitOptions options = relighting_fit_options(result, *solve_plan_);
+  RelightingSample sample(refittable, options);
+  int rows = 0;
+  spill.rewind();
+  for_each_band(0, size().height, [&](ImageStack& band, Observations& observations, int) {
+    const SolveResult solved = spill.read(rows);
+    if (solved.normals.empty()) return;
+    plan_band(band, observations, solve_plan_->threshold);
+    sample.add(observations, solved.normals, solved.solved);
+  });
+  RelightingFit fit = fit_relighting_model(sample, options);
+  nlohmann::json terms = result.reflectance;  // the coefficients' names for the writer; pixels counted below
+  describe_relighting_fit(fit, terms);
+  spill.rewind();
+  for_each_band(0, size().height, [&](ImageStack& band, Observations& observations, int) {
+    SolveResult solved = spill.read(rows);
+    if (solved.normals.empty()) {
+      sink(solved, rows);
+      return;
+    }
+    plan_band(band, observations, solve_plan_->threshold);
+    solved.coefficients =
+        refit_coefficients(observations, solved.normals, solved.solved, fit, options, solved.coefficients);
+    solved.reflectance = terms;
+    solved.choices = result.choices;  // the spill holds maps only
+    sink(solved, rows);
+  });
+  describe_relighting_fit(fit, result.reflectance);
 }
 
 nlohmann::json BandSolver::describe() const {

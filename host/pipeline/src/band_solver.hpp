@@ -3,6 +3,8 @@
 // `solve --tile` (solve_tiles.cpp) share: the passes over a stack's rows and
 // the bands' results made into one.
 
+#include "band_spill.hpp"
+
 #include "lightstage/host/calibration/apply_calibration.hpp"
 #include "lightstage/host/eval/angular_error.hpp"
 #include "lightstage/host/io/solve_output_writer.hpp"
@@ -25,7 +27,8 @@ namespace lightstage::pipeline::bands {
 
 // Results of bands (or of tiles, each itself the result of its bands) made
 // into the whole image's: counts added, the facts that depend on the data
-// (normals facing away, l1/sbl iterations per pixel) merged exactly, and with
+// (normals facing away, iterations per pixel, auto's method counts) merged
+// exactly, and with
 // `keep_maps` the maps pasted at their rows (a tile job's; a whole image's
 // maps go to a SolveOutputWriter band by band instead).
 class BandResults {
@@ -44,7 +47,9 @@ class BandResults {
   SolveResult whole_;
   bool started_ = false;
   std::size_t facing_away_ = 0;
-  double iterations_ = 0;
+  double iterations_ = 0;       // l1/sbl's setting, in total over the pixels
+  double mean_iterations_ = 0;  // the bi-polynomial's finding, in total
+  nlohmann::json method_counts_ = nlohmann::json::object();
 };
 
 // A stack solved band by band. What applies to every band is decided once, at
@@ -64,6 +69,10 @@ class BandSolver {
   // Pass 1: the threshold a whole-image solve estimates, from every row
   // (with --shadow-threshold, a default the flag's value replaces: no pass).
   ShadowThreshold shadow_threshold();
+  // Pass 2, for a method that estimates the object's incidence fall-off
+  // (falloff_estimating_options): that estimate from every row, given to
+  // every band's solve. No pass for the other methods.
+  void estimate_falloff(const ShadowThreshold& threshold);
 
   // Each band's result in turn, top to bottom; one whose normals are empty
   // stands for `rows` rows without a pixel to solve.
@@ -74,6 +83,15 @@ class BandSolver {
   // added to `error` when the stack has one.
   SolveResult solve_rows(int begin, int end, const ShadowThreshold& threshold, AngularErrorAccumulator& error,
                          bool& has_ground_truth, const BandSink& sink);
+
+  // The last two passes of a method whose coefficients are refitted for
+  // relighting (method_refits_relighting), after solve_rows gave its bands to
+  // `spill`, returned `result` and the bands hold `refittable` pixels
+  // (count_refittable_pixels): the object-wide model from a sample of every
+  // band, then each band's coefficients refitted to it and the band given to
+  // `sink`; result.reflectance then describes the fit (what solve_planned
+  // does whole).
+  void refit_relighting(BandSpill& spill, std::size_t refittable, SolveResult& result, const BandSink& sink);
 
   // The per-light statistics of the rows solved so far (nullopt before a band with a mask pixel).
   const std::optional<report::LightStatisticsTally>& light_statistics() const { return light_statistics_; }
@@ -90,6 +108,9 @@ class BandSolver {
  private:
   using BandVisit = std::function<void(ImageStack& band, Observations& observations, int y0)>;
   void for_each_band(int begin, int end, const BandVisit& visit);
+  // Sets a band's lights (warning once about what they are) and returns the
+  // plan of every band's solve, made from the first band.
+  const SolvePlan& plan_band(ImageStack& band, Observations& observations, const ShadowThreshold& threshold);
 
   std::filesystem::path input_;
   SolveSettings settings_;
@@ -102,6 +123,7 @@ class BandSolver {
   std::optional<calibration::StackCalibration> applied_;
   cv::Mat background_;
   nlohmann::json light_model_;
+  std::optional<SolvePlan> solve_plan_;
   std::optional<report::LightStatisticsTally> light_statistics_;
 };
 

@@ -1,6 +1,7 @@
 #include "lightstage/pipeline/solve_bands.hpp"
 
 #include "band_solver.hpp"
+#include "band_spill.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
 #include "lightstage/host/io/output_folder.hpp"
@@ -31,8 +32,16 @@ constexpr std::size_t kUnknownPixelBytes = 12;  // float RGB, the most a frame p
 // `lightstage`).
 constexpr std::size_t kProcessBytes = std::size_t{96} << 20;
 constexpr std::size_t kGroundTruthBytes = 6 + 12 + 12;
+// Per image of a sampled pixel: its value, light and flag, and one model's row of it (a double per
+// coefficient, the value, the image, whether lit; reflectance/relighting_fit.cpp).
+constexpr std::size_t kSampleBytes = 8 + 24 + 1 + 8 + 4 + 1;
+constexpr std::size_t kSampleBytesPerTerm = 8;
 
-constexpr std::array kBandMethods = {"l2", "robust", "monotonic", "l1", "sbl"};
+constexpr std::array kBandMethods = {"l2",       "robust",      "monotonic", "l1",  "sbl",
+                                     "bilinear", "biquadratic", "bicubic",   "auto"};
+// Tiles are solved by jobs that do not see each other: only the methods with no object-wide
+// estimate beyond the shadow threshold (which `--tile prepare` shares).
+constexpr std::array kTileMethods = {"l2", "robust", "monotonic", "l1", "sbl"};
 
 }  // namespace
 
@@ -41,7 +50,7 @@ nlohmann::json BandPlan::to_json() const {
           {"report_bytes", report_bytes}, {"band_rows", band_rows},     {"bands", bands}};
 }
 
-BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit) {
+BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit, int coefficient_terms) {
   const cv::Size size = stack.size;
   const auto width = static_cast<std::size_t>(size.width);
   const auto pixels = width * static_cast<std::size_t>(size.height);
@@ -53,9 +62,15 @@ BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit) {
   const std::size_t decoded = width * (pixel_bytes * (images + stack.dark_files) + kGroundTruthBytes);
   BandPlan plan;
   plan.limit_bytes = memory_limit;
-  plan.row_bytes = decoded + width * (kObservationBytes * images + kPixelBytes + kMapBytes);
+  // A refit band holds its coefficients three times: the solver's, read back from the spill, and refitted.
+  const auto coefficients = static_cast<std::size_t>(std::max(coefficient_terms, 0)) * sizeof(float) * 3;
+  plan.row_bytes = decoded + width * (kObservationBytes * images + kPixelBytes + kMapBytes + coefficients);
   // The program and what is held for the whole image; the output maps go to their files band by band.
   plan.fixed_bytes = kProcessBytes + pixels * kHeldBytes;
+  // The relighting refit's sample: each pixel's values, lights and flags (RelightingSample).
+  if (coefficient_terms > 0)
+    plan.fixed_bytes += static_cast<std::size_t>(RelightingFitOptions{}.sample_pixels) * images *
+                        (kSampleBytes + kSampleBytesPerTerm * static_cast<std::size_t>(coefficient_terms));
   plan.report_bytes = kProcessBytes + report::report_memory_bytes(size.width, size.height);
   plan.whole_bytes =
       std::max(plan.fixed_bytes + plan.row_bytes * static_cast<std::size_t>(size.height), plan.report_bytes);
@@ -82,6 +97,13 @@ bool solves_in_bands(const std::string& method) {
 
 std::string band_methods_text() { return fmt::format("{}", fmt::join(kBandMethods, ", ")); }
 
+bool solves_in_tiles(const SolveSettings& settings) {
+  return std::find(kTileMethods.begin(), kTileMethods.end(), settings.method) != kTileMethods.end() &&
+         !falloff_estimating_options(settings);
+}
+
+std::string tile_methods_text() { return fmt::format("{}", fmt::join(kTileMethods, ", ")); }
+
 SolveReport solve_folder_in_bands(const std::filesystem::path& input, const SolveSettings& settings,
                                   const std::filesystem::path& out, const SolveCalibration& calibration,
                                   io::StackBands& stack, const BandPlan& plan) {
@@ -93,16 +115,31 @@ SolveReport solve_folder_in_bands(const std::filesystem::path& input, const Solv
     logger("host")->warn("{}: the report will take about {}, over --memory-limit {}", input.string(),
                          describe_bytes(plan.report_bytes), describe_bytes(plan.limit_bytes));
   const ShadowThreshold threshold = solver.shadow_threshold();
+  solver.estimate_falloff(threshold);
   AngularErrorAccumulator error;
   bool ground_truth = false;
   io::SolveOutputWriter writer(out, solver.size());
-  const SolveResult result = solver.solve_rows(0, solver.size().height, threshold, error, ground_truth,
-                                               [&writer](const SolveResult& band, int rows) {
-                                                 if (band.normals.empty())
-                                                   writer.add_empty(rows);
-                                                 else
-                                                   writer.add(band);
-                                               });
+  const bands::BandSolver::BandSink write = [&writer](const SolveResult& band, int rows) {
+    if (band.normals.empty())
+      writer.add_empty(rows);
+    else
+      writer.add(band);
+  };
+  SolveResult result;
+  if (!method_refits_relighting(settings.method)) {
+    result = solver.solve_rows(0, solver.size().height, threshold, error, ground_truth, write);
+  } else {
+    // The refit's model needs a sample of every band's normals first: the bands wait on disk.
+    bands::BandSpill spill(out);
+    std::size_t refittable = 0;
+    result = solver.solve_rows(0, solver.size().height, threshold, error, ground_truth,
+                               [&](const SolveResult& band, int rows) {
+                                 if (!band.normals.empty())
+                                   refittable += count_refittable_pixels(band.normals, band.solved);
+                                 spill.write(band, rows);
+                               });
+    solver.refit_relighting(spill, refittable, result, write);
+  }
   nlohmann::json extra = solver.describe();
   if (solver.light_statistics()) extra["light_statistics"] = solver.light_statistics()->summary_json();
   return bands::write_band_solve(input, out, writer, result, extra,

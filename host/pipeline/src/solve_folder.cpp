@@ -141,7 +141,8 @@ SolveReport solve_folder(const std::filesystem::path& input, const SolveSettings
   io::StackOutline outline = io::read_stack_outline(input);
   const cv::Rect region = solve_region(settings, outline.size, input);
   outline.size.height = region.height;  // frames are decoded full width, then cut to the region
-  const BandPlan plan = plan_bands(outline, parse_memory_limit(settings.memory_limit));
+  const BandPlan plan =
+      plan_bands(outline, parse_memory_limit(settings.memory_limit), coefficient_terms(settings.method));
   if (plan.bands > 1) {
     io::StackBands stack(input);
     SolveSettings banded = settings;

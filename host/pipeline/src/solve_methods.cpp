@@ -2,6 +2,7 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
+#include "lightstage/host/reflectance/bipolynomial_model.hpp"
 #include "lightstage/host/reflectance/relighting_fit.hpp"
 #include "lightstage/host/solvers/normal_confidence.hpp"
 #include "lightstage/pipeline/shape_prior_method.hpp"
@@ -139,18 +140,10 @@ SolveResult solve_planned(const Observations& observations, const SolvePlan& pla
   // A per-pixel BRDF is refitted to every lit observation at the answer's
   // normal, for relighting (reflectance/relighting_fit.hpp).
   if (refit_relighting && refits_relighting(result)) {
-    RelightingFitOptions refit;
-    refit.order = result.reflectance.at("order").get<int>();
-    refit.shadow_threshold = std::max(0.0, used.value);
-    refit.threads = settings.threads.value_or(0);
-    const RelightingFit fitted =
-        fit_relighting_brdf(observations, result.normals, result.solved, refit, result.coefficients);
-    result.coefficients = fitted.coefficients;
-    result.reflectance["fit"] = fitted.to_json();
-    if (fitted.lobe_width > 0) {
-      result.reflectance["specular"] = {{"lobe", "beckmann"}, {"width", fitted.lobe_width}, {"term", "S"}};
-      result.reflectance["terms"].push_back("S");
-    }
+    RelightingFit fitted = fit_relighting_brdf(observations, result.normals, result.solved,
+                                               relighting_fit_options(result, plan), result.coefficients);
+    result.coefficients = std::move(fitted.coefficients);
+    describe_relighting_fit(fitted, result.reflectance);
   }
   return result;
 }
@@ -158,6 +151,61 @@ SolveResult solve_planned(const Observations& observations, const SolvePlan& pla
 bool refits_relighting(const SolveResult& result) {
   return !result.coefficients.empty() && result.reflectance.is_object() &&
          result.reflectance.value("model", "") == "bipolynomial";
+}
+
+RelightingFitOptions relighting_fit_options(const SolveResult& result, const SolvePlan& plan) {
+  RelightingFitOptions refit;
+  refit.order = result.reflectance.at("order").get<int>();
+  refit.shadow_threshold = std::max(0.0, plan.threshold.value);
+  refit.threads = plan.settings.threads.value_or(0);
+  return refit;
+}
+
+void describe_relighting_fit(const RelightingFit& fit, nlohmann::json& reflectance) {
+  reflectance["fit"] = fit.to_json();
+  if (fit.lobe_width > 0) {
+    reflectance["specular"] = {{"lobe", "beckmann"}, {"width", fit.lobe_width}, {"term", "S"}};
+    reflectance["terms"].push_back("S");
+  }
+}
+
+namespace {
+
+// 1-3 for the bi-polynomial methods, else 0.
+int bipolynomial_method_order(const std::string& method) {
+  if (method == "bilinear") return 1;
+  if (method == "biquadratic" || method == "auto") return 2;
+  if (method == "bicubic") return 3;
+  return 0;
+}
+
+}  // namespace
+
+bool method_refits_relighting(const std::string& method) { return bipolynomial_method_order(method) > 0; }
+
+int coefficient_terms(const std::string& method) {
+  const int order = bipolynomial_method_order(method);
+  return order == 0 ? 0 : bipolynomial_term_count(order) + 1;  // and the specular lobe's weight
+}
+
+std::optional<BiPolynomialOptions> falloff_estimating_options(const SolveSettings& settings) {
+  if (settings.method == "monotonic" && settings.azimuth_from != "isotropy" &&
+      settings.azimuth_from != "monotonic") {
+    SolveSettings azimuth = settings;
+    azimuth.method = settings.azimuth_from;
+    return falloff_estimating_options(azimuth);
+  }
+  const BiPolynomialOptions& options =
+      settings.method == "auto" ? settings.automatic.bipolynomial : settings.bipolynomial;
+  const int order = bipolynomial_method_order(settings.method);
+  if (order == 0 || options.falloff) return std::nullopt;
+  BiPolynomialOptions estimating = options;
+  estimating.order = order;
+  return estimating;
+}
+
+void use_falloff_estimate(SolveSettings& settings, const FalloffEstimate& estimate) {
+  settings.bipolynomial.falloff_estimate = settings.automatic.bipolynomial.falloff_estimate = estimate;
 }
 
 SolveFact facing_away_fact(std::size_t count) {

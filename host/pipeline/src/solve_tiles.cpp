@@ -434,9 +434,11 @@ SolveReport solve_tile(const fs::path& input, const SolveSettings& settings, con
                        const SolveCalibration& calibration, const std::string& tile,
                        const ProgressStart& progress) {
   io::require_separate_output(out, {input});
-  if (!solves_in_bands(settings.method))
-    fail("--tile: --method {} needs the whole image at once; tiles solve {}", settings.method,
-         band_methods_text());
+  if (!solves_in_tiles(settings))
+    fail(
+        "--tile: --method {} needs the whole image at once; tiles solve {} (and no --azimuth-from a "
+        "bi-polynomial method)",
+        settings.method, tile_methods_text());
   if (tile == "prepare") return prepare_tiles(input, settings, out, calibration);
   if (tile == "merge") return merge_tiles(input, settings, out, calibration);
   return solve_one_tile(input, settings, out, calibration, parse_tile_job(tile), progress);

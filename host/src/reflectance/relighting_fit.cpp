@@ -38,9 +38,8 @@ struct PixelRows {
   int lit_rows = 0;
 };
 
-void pixel_rows(const Observations& observations, std::size_t p, const Eigen::Vector3d& n, const Model& model,
-                double threshold, PixelObservations& scratch, PixelRows& out) {
-  load_pixel(observations, p, true, scratch);
+void pixel_rows(const PixelObservations& scratch, const Eigen::Vector3d& n, const Model& model,
+                double threshold, PixelRows& out) {
   const int polynomial = bipolynomial_term_count(model.order);
   const Eigen::Index images = scratch.count();
   out.design.resize(images, model.terms());
@@ -134,30 +133,33 @@ Eigen::VectorXd regularised_coefficients(const Eigen::MatrixXd& gram, const Eige
   return c.allFinite() ? c : Eigen::VectorXd(scale * g);
 }
 
-// Evenly spread, at most `limit` of `all`.
-std::vector<std::size_t> spread_sample(const std::vector<std::size_t>& all, std::size_t limit) {
-  if (all.size() <= limit) return all;
-  std::vector<std::size_t> out;
-  out.reserve(limit);
-  for (std::size_t i = 0; i < limit; ++i) out.push_back(all[i * all.size() / limit]);
-  return out;
-}
-
 Eigen::Vector3d normal_at(const cv::Mat& normals, const cv::Point& at) {
   const cv::Vec3f v = normals.at<cv::Vec3f>(at);
   return Eigen::Vector3d(v[0], v[1], v[2]).normalized();
 }
 
+// A solved pixel whose coefficients are refitted: a finite normal of about unit length.
+bool refittable(const cv::Mat& normals, const cv::Mat& solved, const cv::Point& at) {
+  const cv::Vec3f n = normals.at<cv::Vec3f>(at);
+  return solved.at<std::uint8_t>(at) != 0 && std::isfinite(n[0] + n[1] + n[2]) && cv::norm(n) > 0.5;
+}
+
+void check_maps(const Observations& observations, const cv::Mat& normals, const cv::Mat& solved,
+                const char* who) {
+  check_observations(observations, who);
+  if (normals.type() != CV_32FC3 || solved.type() != CV_8UC1 || normals.size() != observations.size ||
+      solved.size() != observations.size)
+    fail("{}: needs CV_32FC3 normals and a CV_8UC1 solved map of the observations' size {}x{}", who,
+         observations.size.width, observations.size.height);
+}
+
 // The sample's rows, made once per model.
-std::vector<PixelRows> sample_rows(const Observations& observations, const cv::Mat& normals,
-                                   const std::vector<std::size_t>& sample, const Model& model,
+std::vector<PixelRows> sample_rows(const RelightingSample& sample, const Model& model,
                                    const RelightingFitOptions& options) {
   std::vector<PixelRows> rows(sample.size());
   parallel_chunks(sample.size(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-    PixelObservations scratch;
     for (std::size_t i = begin; i < end; ++i)
-      pixel_rows(observations, sample[i], normal_at(normals, observations.pixels[sample[i]]), model,
-                 options.shadow_threshold, scratch, rows[i]);
+      pixel_rows(sample.pixel(i), sample.normal(i), model, options.shadow_threshold, rows[i]);
   });
   return rows;
 }
@@ -279,36 +281,48 @@ nlohmann::json RelightingFit::to_json() const {
           {"pixels", pixels}};
 }
 
-RelightingFit fit_relighting_brdf(const Observations& observations, const cv::Mat& normals,
-                                  const cv::Mat& solved, const RelightingFitOptions& options,
-                                  const cv::Mat& fallback) {
-  options.check();
-  check_observations(observations, "fit_relighting_brdf");
-  if (normals.type() != CV_32FC3 || solved.type() != CV_8UC1 || normals.size() != observations.size ||
-      solved.size() != observations.size)
-    fail(
-        "fit_relighting_brdf: needs CV_32FC3 normals and a CV_8UC1 solved map of the observations' size "
-        "{}x{}",
-        observations.size.width, observations.size.height);
-  const int folds = options.folds;
-  const int polynomial = bipolynomial_term_count(options.order);
-  if (!fallback.empty() && (fallback.size() != observations.size || fallback.type() != CV_32FC(polynomial)))
-    fail("fit_relighting_brdf: the fallback coefficients must be CV_32FC({}) of the observations' size",
-         polynomial);
+std::size_t count_refittable_pixels(const cv::Mat& normals, const cv::Mat& solved) {
+  if (normals.type() != CV_32FC3 || solved.type() != CV_8UC1 || normals.size() != solved.size())
+    fail("count_refittable_pixels: needs CV_32FC3 normals and a CV_8UC1 solved map of their size");
+  std::size_t count = 0;
+  for (int y = 0; y < normals.rows; ++y)
+    for (int x = 0; x < normals.cols; ++x) count += refittable(normals, solved, {x, y}) ? 1 : 0;
+  return count;
+}
 
-  std::vector<std::size_t> solved_pixels;
+RelightingSample::RelightingSample(std::size_t refittable_pixels, const RelightingFitOptions& options)
+    : total_(refittable_pixels), limit_(static_cast<std::size_t>(options.sample_pixels)) {
+  options.check();
+}
+
+void RelightingSample::add(const Observations& observations, const cv::Mat& normals, const cv::Mat& solved) {
+  check_maps(observations, normals, solved, "RelightingSample");
+  // Evenly spread: member i is refittable pixel floor(i · total / limit), every one when they are fewer.
+  const auto member = [&](std::size_t i) { return total_ <= limit_ ? i : i * total_ / limit_; };
   for (std::size_t p = 0; p < observations.pixel_count(); ++p) {
     const cv::Point& at = observations.pixels[p];
-    const cv::Vec3f n = normals.at<cv::Vec3f>(at);
-    if (solved.at<std::uint8_t>(at) != 0 && std::isfinite(n[0] + n[1] + n[2]) && cv::norm(n) > 0.5)
-      solved_pixels.push_back(p);
+    if (!refittable(normals, solved, at)) continue;
+    if (seen_ >= total_) fail("RelightingSample: more refittable pixels than the {} it was made for", total_);
+    if (normals_.size() < std::min(total_, limit_) && member(normals_.size()) == seen_) {
+      pixels_.emplace_back();
+      load_pixel(observations, p, true, pixels_.back());
+      normals_.push_back(normal_at(normals, at));
+    }
+    ++seen_;
   }
-  const std::vector<std::size_t> sample =
-      spread_sample(solved_pixels, static_cast<std::size_t>(options.sample_pixels));
-  RelightingFit fit;
+}
 
+RelightingFit fit_relighting_model(const RelightingSample& sample, const RelightingFitOptions& options) {
+  options.check();
+  if (sample.seen() != sample.total())
+    fail("RelightingSample: {} of the {} refittable pixels it was made for were added", sample.seen(),
+         sample.total());
+  const int folds = options.folds;
+  const int polynomial = bipolynomial_term_count(options.order);
+  RelightingFit fit;
+  fit.order = options.order;
   Model model{options.order, 0};
-  const std::vector<PixelRows> rows = sample_rows(observations, normals, sample, model, options);
+  std::vector<PixelRows> rows = sample_rows(sample, model, options);
   ObjectBrdf object = object_brdf(rows, model.terms(), folds);
   if (options.lambda) {
     fit.lambda = *options.lambda;
@@ -323,12 +337,14 @@ RelightingFit fit_relighting_brdf(const Observations& observations, const cv::Ma
       if (errors[c] < errors[best]) best = c;
     }
     fit.lambda = candidates[best];
+    // One model's rows held at a time (they are most of the refit's memory).
+    std::vector<PixelRows>().swap(rows);
     // The lobe: every width with every λ of its weight, at the polynomial's λ.
     double best_error = errors[best] * (1 - options.min_lobe_gain);
     if (options.specular_lobe) {
       for (const double m : options.lobe_widths) {
         const Model lobed{options.order, m};
-        const std::vector<PixelRows> lobe_rows = sample_rows(observations, normals, sample, lobed, options);
+        const std::vector<PixelRows> lobe_rows = sample_rows(sample, lobed, options);
         const ObjectBrdf lobe_object = object_brdf(lobe_rows, lobed.terms(), folds);
         std::vector<Eigen::VectorXd> lobe_penalties;
         for (const double l : options.lobe_lambdas) {
@@ -349,43 +365,66 @@ RelightingFit fit_relighting_brdf(const Observations& observations, const cv::Ma
         }
       }
     }
-    model.lobe = fit.lobe_width;
   }
   fit.object_brdf = object.per_fold[static_cast<std::size_t>(folds)];
-  Eigen::VectorXd weights = fit.lambda * object.weights;
-  if (model.lobe > 0) weights(polynomial) = fit.lobe_lambda * object.weights(polynomial);
+  fit.penalty = fit.lambda * object.weights;
+  if (fit.lobe_width > 0) fit.penalty(polynomial) = fit.lobe_lambda * object.weights(polynomial);
+  return fit;
+}
 
+cv::Mat refit_coefficients(const Observations& observations, const cv::Mat& normals, const cv::Mat& solved,
+                           RelightingFit& fit, const RelightingFitOptions& options, const cv::Mat& fallback) {
+  check_maps(observations, normals, solved, "fit_relighting_brdf");
+  const int polynomial = bipolynomial_term_count(fit.order);
+  if (!fallback.empty() && (fallback.size() != observations.size || fallback.type() != CV_32FC(polynomial)))
+    fail("fit_relighting_brdf: the fallback coefficients must be CV_32FC({}) of the observations' size",
+         polynomial);
+  std::vector<std::size_t> pixels;
+  for (std::size_t p = 0; p < observations.pixel_count(); ++p)
+    if (refittable(normals, solved, observations.pixels[p])) pixels.push_back(p);
+  const Model model{fit.order, fit.lobe_width};
   const int terms = model.terms();
-  fit.coefficients = cv::Mat(observations.size, CV_32FC(terms), cv::Scalar::all(0));
-  std::vector<std::uint8_t> refitted(solved_pixels.size(), 0);
-  parallel_chunks(
-      solved_pixels.size(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-        PixelObservations scratch;
-        PixelRows pixel;
-        Eigen::MatrixXd gram;
-        Eigen::VectorXd rhs;
-        for (std::size_t i = begin; i < end; ++i) {
-          const std::size_t p = solved_pixels[i];
-          const cv::Point& at = observations.pixels[p];
-          pixel_rows(observations, p, normal_at(normals, at), model, options.shadow_threshold, scratch,
-                     pixel);
-          auto* out = fit.coefficients.ptr<float>(at.y) + static_cast<std::ptrdiff_t>(at.x) * terms;
-          if (pixel.lit_rows == 0) {
-            // Nothing lit in front of the normal: the fallback's polynomial, no lobe.
-            if (!fallback.empty()) {
-              const auto* given = fallback.ptr<float>(at.y) + static_cast<std::ptrdiff_t>(at.x) * polynomial;
-              std::copy(given, given + polynomial, out);
-            }
-            continue;
-          }
-          refitted[i] = 1;
-          lit_normal_equations(pixel, gram, rhs);
-          const Eigen::VectorXd c =
-              regularised_coefficients(gram, rhs, fit.object_brdf, weights, pixel.lambert);
-          for (int t = 0; t < terms; ++t) out[t] = static_cast<float>(c(t));
+  cv::Mat coefficients(observations.size, CV_32FC(terms), cv::Scalar::all(0));
+  std::vector<std::uint8_t> refitted(pixels.size(), 0);
+  parallel_chunks(pixels.size(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    PixelObservations scratch;
+    PixelRows pixel;
+    Eigen::MatrixXd gram;
+    Eigen::VectorXd rhs;
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::size_t p = pixels[i];
+      const cv::Point& at = observations.pixels[p];
+      load_pixel(observations, p, true, scratch);
+      pixel_rows(scratch, normal_at(normals, at), model, options.shadow_threshold, pixel);
+      auto* out = coefficients.ptr<float>(at.y) + static_cast<std::ptrdiff_t>(at.x) * terms;
+      if (pixel.lit_rows == 0) {
+        // Nothing lit in front of the normal: the fallback's polynomial, no lobe.
+        if (!fallback.empty()) {
+          const auto* given = fallback.ptr<float>(at.y) + static_cast<std::ptrdiff_t>(at.x) * polynomial;
+          std::copy(given, given + polynomial, out);
         }
-      });
-  fit.pixels = static_cast<std::size_t>(std::count(refitted.begin(), refitted.end(), 1));
+        continue;
+      }
+      refitted[i] = 1;
+      lit_normal_equations(pixel, gram, rhs);
+      const Eigen::VectorXd c =
+          regularised_coefficients(gram, rhs, fit.object_brdf, fit.penalty, pixel.lambert);
+      for (int t = 0; t < terms; ++t) out[t] = static_cast<float>(c(t));
+    }
+  });
+  fit.pixels += static_cast<std::size_t>(std::count(refitted.begin(), refitted.end(), 1));
+  return coefficients;
+}
+
+RelightingFit fit_relighting_brdf(const Observations& observations, const cv::Mat& normals,
+                                  const cv::Mat& solved, const RelightingFitOptions& options,
+                                  const cv::Mat& fallback) {
+  options.check();
+  check_maps(observations, normals, solved, "fit_relighting_brdf");
+  RelightingSample sample(count_refittable_pixels(normals, solved), options);
+  sample.add(observations, normals, solved);
+  RelightingFit fit = fit_relighting_model(sample, options);
+  fit.coefficients = refit_coefficients(observations, normals, solved, fit, options, fallback);
   return fit;
 }
 

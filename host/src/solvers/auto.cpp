@@ -156,15 +156,10 @@ SolveResult solve_auto(const Observations& observations, const AutoOptions& opti
                         {"y", "l.h"}};
   SolveSummary& s = result.summary;
   nlohmann::json counts = nlohmann::json::object();
-  std::string shares;
-  for (std::size_t k = 0; k < kChoiceNames.size(); ++k) {
-    const auto count = static_cast<std::size_t>(cv::countNonZero(result.choice == static_cast<int>(k + 1)));
-    counts[kChoiceNames[k]] = count;
-    if (count == 0 || s.pixels_solved == 0) continue;
-    shares += fmt::format("{}{} {:.0f}%", shares.empty() ? "" : ", ", kChoiceNames[k],
-                          100.0 * static_cast<double>(count) / static_cast<double>(s.pixels_solved));
-  }
-  s.findings.push_back({"method_counts", counts, shares.empty() ? std::string{} : "from " + shares});
+  for (std::size_t k = 0; k < kChoiceNames.size(); ++k)
+    counts[kChoiceNames[k]] =
+        static_cast<std::size_t>(cv::countNonZero(result.choice == static_cast<int>(k + 1)));
+  s.findings.push_back(method_counts_fact(counts, s.pixels_solved));
   const std::string model = bipolynomial_name(bipolynomial.order);
   if (use_monotonic) {
     s.settings = {{"models", {model, "monotonic"}, model + " + monotonic"}};
@@ -175,6 +170,18 @@ SolveResult solve_auto(const Observations& observations, const AutoOptions& opti
   }
   s.message = s.format_message();
   return result;
+}
+
+SolveFact method_counts_fact(const nlohmann::json& counts, std::size_t solved) {
+  std::string shares;
+  // In the choices' order (SolveResult::choices), not the JSON object's alphabetical one.
+  for (const std::string& name : kChoiceNames) {
+    const auto count = counts.value(name, std::size_t{0});
+    if (count == 0 || solved == 0) continue;
+    shares += fmt::format("{}{} {:.0f}%", shares.empty() ? "" : ", ", name,
+                          100.0 * static_cast<double>(count) / static_cast<double>(solved));
+  }
+  return {"method_counts", counts, shares.empty() ? std::string{} : "from " + shares};
 }
 
 }  // namespace lightstage

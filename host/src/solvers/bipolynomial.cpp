@@ -95,7 +95,9 @@ bool select_low_frequency(const PixelObservations& pixel, const BiPolynomialOpti
 std::optional<FalloffEstimate> resolve_falloff(const Observations& observations,
                                                BiPolynomialOptions& options) {
   if (options.falloff) return std::nullopt;
-  const FalloffEstimate estimate = estimate_incidence_falloff(observations, options);
+  const FalloffEstimate estimate = options.falloff_estimate
+                                       ? *options.falloff_estimate
+                                       : estimate_incidence_falloff(observations, options);
   options.falloff = estimate.kappa;
   return estimate;
 }
@@ -193,6 +195,10 @@ BiPolynomialPixelFit fit_bipolynomial_pixel(const PixelObservations& pixel,
   return fit;
 }
 
+SolveFact mean_iterations_fact(double mean) {
+  return {"mean_iterations", mean, fmt::format("{:.1f} iterations on average", mean)};
+}
+
 SolveResult solve_bipolynomial(const Observations& observations, const BiPolynomialOptions& given) {
   given.check();
   BiPolynomialOptions options = given;
@@ -239,7 +245,7 @@ SolveResult solve_bipolynomial(const Observations& observations, const BiPolynom
   s.settings = {{"t_low", options.t_low, fmt::format("T_low {:.0f}%", 100 * options.t_low)},
                 {"falloff", falloff, fmt::format("fall-off {:.3f}{}", falloff, estimate ? " estimated" : "")},
                 {"falloff_estimated", estimate.has_value(), ""}};
-  s.findings = {{"mean_iterations", iterations, fmt::format("{:.1f} iterations on average", iterations)}};
+  s.findings = {mean_iterations_fact(iterations)};
   s.message = s.format_message();
   return result;
 }

@@ -23,6 +23,7 @@
 // than the polynomial alone by more than min_lobe_gain.
 
 #include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/solvers/pixel_observations.hpp"
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
@@ -52,9 +53,12 @@ struct RelightingFitOptions {
 
 struct RelightingFit {
   // CV_32FC(k), or CV_32FC(k + 1) with the lobe's weight last: per-pixel
-  // coefficients where solved, else 0.
+  // coefficients where solved, else 0 (fit_relighting_brdf; empty from
+  // fit_relighting_model).
   cv::Mat coefficients;
+  int order = 2;                // of the bi-polynomial
   Eigen::VectorXd object_brdf;  // g (the lobe's weight last)
+  Eigen::VectorXd penalty;      // λ_t D_t per term
   double lambda = 0;            // the weight used
   double lobe_width = 0;        // m; 0 = no lobe
   double lobe_lambda = 0;       // the lobe weight's λ
@@ -62,11 +66,55 @@ struct RelightingFit {
   // λ, then per lobe candidate {m, its λ, error} (empty when λ was fixed).
   std::vector<std::pair<double, double>> validation;
   std::vector<std::array<double, 3>> lobe_validation;
-  std::size_t pixels = 0;  // pixels refitted (the others kept the fallback)
+  std::size_t pixels = 0;  // pixels refitted so far (the others kept the fallback)
 
   // For the solve's reflectance description ("fit").
   nlohmann::json to_json() const;
 };
+
+// The refit in parts, for observations met a band of rows at a time (a
+// stack read in bands): the solved pixels counted, a sample of them gathered
+// band by band, the object-wide model (g, λ, the lobe) fitted to the sample,
+// then each band's pixels refitted. The parts give what fit_relighting_brdf
+// gives the whole image at once, float for float.
+
+// The pixels of `normals` (CV_32FC3) / `solved` (CV_8UC1) that are refitted:
+// solved, with a finite normal of about unit length.
+std::size_t count_refittable_pixels(const cv::Mat& normals, const cv::Mat& solved);
+
+// At most options.sample_pixels of the refittable pixels, evenly spread over
+// them in scan order: their observations and normals.
+class RelightingSample {
+ public:
+  // `refittable_pixels`: those of the whole image.
+  RelightingSample(std::size_t refittable_pixels, const RelightingFitOptions& options);
+  // The whole image's pixels, or one band's after another, top to bottom.
+  void add(const Observations& observations, const cv::Mat& normals, const cv::Mat& solved);
+
+  std::size_t size() const { return pixels_.size(); }
+  const PixelObservations& pixel(std::size_t i) const { return pixels_[i]; }
+  const Eigen::Vector3d& normal(std::size_t i) const { return normals_[i]; }
+  std::size_t total() const { return total_; }
+  std::size_t seen() const { return seen_; }
+
+ private:
+  std::size_t total_ = 0;
+  std::size_t limit_ = 0;
+  std::size_t seen_ = 0;  // refittable pixels added so far
+  std::vector<PixelObservations> pixels_;
+  std::vector<Eigen::Vector3d> normals_;
+};
+
+// The object-wide part from every pixel's sample: g, λ (cross-validated
+// unless fixed), the lobe. Throws InputError when the sample did not see
+// every pixel it was made for.
+RelightingFit fit_relighting_model(const RelightingSample& sample, const RelightingFitOptions& options);
+
+// The refitted coefficients of every refittable pixel of `observations`
+// (the whole image's or a band's), by `fit`'s model; adds the pixels
+// refitted to fit.pixels. `fallback` as below.
+cv::Mat refit_coefficients(const Observations& observations, const cv::Mat& normals, const cv::Mat& solved,
+                           RelightingFit& fit, const RelightingFitOptions& options, const cv::Mat& fallback);
 
 // Refits the coefficients of every solved pixel of `normals` (CV_32FC3) /
 // `solved` (CV_8UC1) from `observations`. Pixels without a lit observation

@@ -47,4 +47,8 @@ struct AutoOptions {
 
 SolveResult solve_auto(const Observations& observations, const AutoOptions& options = {});
 
+// The summary's "method_counts" finding: `counts` ({choice name: pixels})
+// and their shares of the `solved` pixels.
+SolveFact method_counts_fact(const nlohmann::json& counts, std::size_t solved);
+
 }  // namespace lightstage

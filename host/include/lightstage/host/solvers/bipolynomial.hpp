@@ -36,6 +36,10 @@ struct BiPolynomialOptions {
   // solve_auto estimate it from the object; 0: the Lambertian start, as
   // published. fit_bipolynomial_pixel takes an unset value as 0.
   std::optional<double> falloff;
+  // The object's κ estimated beforehand (over every band of a stack read in
+  // bands: FalloffSamples); with falloff unset, used instead of an estimate
+  // from the observations solved. Not part of to_json().
+  std::optional<FalloffEstimate> falloff_estimate;
   int max_iterations = 100;    // alternations, ≥ 1
   double tolerance = 1e-7;     // stop when the squared residual changes less
   bool drop_saturated = true;  // drop observations flagged saturated
@@ -77,8 +81,9 @@ BiPolynomialPixelFit fit_bipolynomial_pixel(const PixelObservations& pixel,
                                             const BiPolynomialOptions& options,
                                             BiPolynomialWorkspace& workspace);
 
-// Sets options.falloff from the observations when it is unset and returns
-// that estimate (nothing when options.falloff was given).
+// Sets options.falloff, when it is unset, from options.falloff_estimate or
+// else from the observations, and returns that estimate (nothing when
+// options.falloff was given).
 std::optional<FalloffEstimate> resolve_falloff(const Observations& observations,
                                                BiPolynomialOptions& options);
 
@@ -86,6 +91,9 @@ std::optional<FalloffEstimate> resolve_falloff(const Observations& observations,
 // a result's parameters.
 nlohmann::json falloff_json(const BiPolynomialOptions& options,
                             const std::optional<FalloffEstimate>& estimate);
+
+// The summary's "mean_iterations" finding.
+SolveFact mean_iterations_fact(double mean);
 
 // Every pixel; method name "bilinear" / "biquadratic" / "bicubic".
 SolveResult solve_bipolynomial(const Observations& observations, const BiPolynomialOptions& options = {});

@@ -1,20 +1,24 @@
 #pragma once
 // Solving a stack larger than memory band by band: row bands of every frame
 // decoded together (io/stack_bands.hpp), made into observations, solved and
-// pasted into the whole image's maps, so that the stack itself is never held.
-// The result equals solving the whole image at once (the same normals,
-// albedo, residual, confidence and chroma, float for float):
-//   pass 1  the shadow threshold's samples (shadow_threshold.hpp), drawn from
-//           the whole image's pixels as a whole-image solve draws them (not
-//           with --shadow-threshold: the stack is then decoded once);
-//   pass 2  each band solved with that threshold; a pixel's place in the whole
-//           image (Observations::origin, first_pixel) gives its near lights
-//           and its random seed.
-// The per-pixel methods without a whole-object step are solved so: l2,
-// robust, monotonic, l1 and sbl. The bi-polynomial methods and auto refit
-// their relighting model over the whole object, rpca decomposes blocks of
-// pixels and shape-prior smooths across them: they are refused in bands.
-// The output maps are held whole (about 50 bytes a pixel).
+// written to the solve folder band by band (io/solve_output_writer.hpp), so
+// that neither the stack nor the result is ever held whole. The result equals
+// solving the whole image at once (the same maps float for float, the same
+// counts and facts). What the whole-image solve estimates from the whole
+// object, each in a pass over every band first:
+//   the shadow threshold's samples (shadow_threshold.hpp), drawn from the
+//     whole image's pixels as a whole-image solve draws them (not with
+//     --shadow-threshold);
+//   the incidence fall-off κ of the bi-polynomial methods and auto
+//     (incidence_falloff.hpp; not with --falloff);
+// then each band is solved; a pixel's place in the whole image
+// (Observations::origin, first_pixel) gives its near lights and its random
+// seed. The bi-polynomial methods and auto refit their coefficients for
+// relighting over the whole object (reflectance/relighting_fit.hpp): their
+// solved bands wait in a spill file in the output folder (about 80 bytes a
+// pixel) while a sample of every band fits the object's model, then each band
+// is refitted and written (two more passes). rpca decomposes blocks of pixels
+// and shape-prior smooths across them: they are refused in bands.
 
 #include "lightstage/host/io/stack_bands.hpp"
 #include "lightstage/pipeline/solve_folder.hpp"
@@ -45,12 +49,18 @@ struct BandPlan {
 // The plan for solving `stack` within `memory_limit` bytes: the whole image
 // when it fits, else the tallest bands that fit. Throws InputError naming
 // --memory-limit when not even a band of one row fits.
-BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit);
+// `coefficient_terms`: the most reflectance coefficients a pixel of the
+// method's result has (coefficient_terms in solve_methods.hpp).
+BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit, int coefficient_terms = 0);
 
 // Whether `method` can be solved band by band (see above).
 bool solves_in_bands(const std::string& method);
 // Those methods, "l2, robust, ...", for messages.
 std::string band_methods_text();
+// Whether `settings` can be solved as tiles by independent jobs (solve_tiles.hpp): the band methods
+// without an object-wide estimate but the threshold.
+bool solves_in_tiles(const SolveSettings& settings);
+std::string tile_methods_text();
 
 // Solves `stack` (opened from `input`) in the bands of `plan` and writes the
 // solve folder as solve_folder does. Throws InputError, before reading any

@@ -6,12 +6,14 @@
 // its options in SolveSettings) and no caller changes.
 
 #include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/reflectance/relighting_fit.hpp"
 #include "lightstage/host/shadow_threshold.hpp"
 #include "lightstage/host/solvers/solve_result.hpp"
 #include "lightstage/pipeline/solve_settings.hpp"
 
 #include <cstddef>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -64,6 +66,24 @@ SolveResult solve_planned(const Observations& observations, const SolvePlan& pla
                           bool refit_relighting = true);
 // Whether solve_planned refits `result`'s coefficients for relighting.
 bool refits_relighting(const SolveResult& result);
+// What that refit is given (the result's order, the plan's threshold and threads).
+RelightingFitOptions relighting_fit_options(const SolveResult& result, const SolvePlan& plan);
+// The refit said in the result's reflectance: "fit", and the lobe's "specular" and term "S".
+void describe_relighting_fit(const RelightingFit& fit, nlohmann::json& reflectance);
+// Whether --method's result is refitted for relighting (the bi-polynomial methods and auto), and the
+// coefficients a pixel of it may have at most (its polynomial's and the lobe's; 0 for the others).
+bool method_refits_relighting(const std::string& method);
+int coefficient_terms(const std::string& method);
+
+// The bi-polynomial options with which the method of `settings` estimates the
+// object's incidence fall-off κ from the observations it solves
+// (bilinear/biquadratic/bicubic, auto, monotonic with its azimuth from one of
+// them; solvers/incidence_falloff.hpp), nothing when it does not or --falloff
+// gives κ. A stack solved in bands estimates it once from every band, then
+// gives every band that estimate (use_falloff_estimate), as a whole-image
+// solve would have it.
+std::optional<BiPolynomialOptions> falloff_estimating_options(const SolveSettings& settings);
+void use_falloff_estimate(SolveSettings& settings, const FalloffEstimate& estimate);
 // The normals_facing_away finding for `count` clamped normals.
 SolveFact facing_away_fact(std::size_t count);
 
