@@ -27,6 +27,8 @@ if(NOT LIGHTSTAGE_CONTROLLER_ONLY)
   # library that links it; <libraw/libraw.h> needs neither.
   set_target_properties(PkgConfig::LIBRAW PROPERTIES INTERFACE_INCLUDE_DIRECTORIES "" INTERFACE_COMPILE_OPTIONS "")
   pkg_check_modules(EXIV2 REQUIRED IMPORTED_TARGET exiv2>=0.27.4)
+  # The operator's station (host/station): Debian's cpp-httplib, a compiled library with its own defines.
+  pkg_check_modules(HTTPLIB REQUIRED IMPORTED_TARGET cpp-httplib>=0.11)
 endif()
 
 # Optional hardware backends: AUTO builds what is found.

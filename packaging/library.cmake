@@ -7,7 +7,7 @@
 
 # In link order: each needs only those after it.
 set(LIGHTSTAGE_EXPORTED_LIBRARIES
-    lightstage_pipeline lightstage_host lightstage_sim_camera_client lightstage_sim lightstage_firmware
+    lightstage_station lightstage_pipeline lightstage_host lightstage_sim_camera_client lightstage_sim lightstage_firmware
     lightstage_hw lightstage_sim_gpio lightstage_protocol lightstage_protocol_messages lightstage_common)
 set(exported)  # those this build has (a controller-only build has no host)
 foreach(library ${LIGHTSTAGE_EXPORTED_LIBRARIES})
@@ -66,7 +66,8 @@ set(pc_dir ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
 file(RELATIVE_PATH pc_to_prefix /prefix/${pc_dir} /prefix)
 set(pc_requires eigen3 fmt spdlog yaml-cpp protobuf zlib)
 if(LIGHTSTAGE_CONFIG_HOST)
-  list(APPEND pc_requires nlohmann_json OpenEXR libpng16 libtiff-4 "libraw_r >= 0.20" "exiv2 >= 0.27.4")
+  list(APPEND pc_requires nlohmann_json OpenEXR libpng16 libtiff-4 "libraw_r >= 0.20" "exiv2 >= 0.27.4"
+       "cpp-httplib >= 0.11")
 endif()
 foreach(backend GPIOD LIBCAMERA ARAVIS GPHOTO2 LIBUSB)
   if(LIGHTSTAGE_HAVE_${backend})

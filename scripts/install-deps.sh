@@ -23,6 +23,7 @@ packages=(
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-photo-dev
   libopenexr-dev libraw-dev libpng-dev libtiff-dev libexiv2-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
+  libcpp-httplib-dev  # the operator's station's HTTP server (lightstage serve)
   libgtest-dev libgmock-dev libbenchmark-dev
   libgpiod-dev libusb-1.0-0-dev libcamera-dev
   libgphoto2-dev libaravis-dev  # DSLRs over USB and GenICam cameras (host only: not in cross_packages)

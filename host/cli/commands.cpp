@@ -15,6 +15,7 @@ const std::vector<Command>& commands() {
       {"camera", add_camera},   {"calibrate", add_calibrate},
       {"report", add_report},   {"integrate", add_integrate},
       {"export", add_export},   {"import", add_import},
+      {"serve", add_serve},
   };
   return table;
 }

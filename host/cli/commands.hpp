@@ -39,5 +39,6 @@ void add_report(CLI::App& app);
 void add_integrate(CLI::App& app);
 void add_export(CLI::App& app);
 void add_import(CLI::App& app);
+void add_serve(CLI::App& app);
 
 }  // namespace lightstage::cli

@@ -15,6 +15,7 @@
 #include "lightstage/host/report/report.hpp"
 #include "lightstage/host/surface/integration.hpp"
 #include "lightstage/host/surface/surface_output.hpp"
+#include "lightstage/pipeline/socket_folder.hpp"
 #include "lightstage/pipeline/solve_folder.hpp"
 #include "lightstage/sim/camera/sim_camera.hpp"
 #include "lightstage/sim/simulate.hpp"
@@ -25,8 +26,6 @@
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
-
-#include <unistd.h>
 
 namespace lightstage::pipeline {
 namespace {
@@ -39,27 +38,6 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// Unix socket paths are short (108 bytes): the sockets live in a private
-// folder under the temp dir, removed when the demo ends.
-class SocketFolder {
- public:
-  SocketFolder() {
-    std::string pattern = (fs::temp_directory_path() / "lightstage-demo-XXXXXX").string();
-    if (::mkdtemp(pattern.data()) == nullptr) throw Error("cannot create a socket folder in " + pattern);
-    path_ = pattern;
-  }
-  ~SocketFolder() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  SocketFolder(const SocketFolder&) = delete;
-  SocketFolder& operator=(const SocketFolder&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
-
 struct Stage {
   std::string name;      // "chrome-1", "object": the log folder's and the socket folder's name
   std::string scene;     // lightstage-sim --scene
@@ -70,14 +48,6 @@ struct Stage {
   // (peaks at 50-80% of full scale keep the LED positions' noise low).
   bool highlight_target = false;
 };
-
-std::string chrome_sphere_scene(double radius_mm, double x_mm, double z_mm) {
-  // A chrome ball on a dark stand: the room is dim, so only the LED's reflection is bright.
-  return fmt::format(
-      "name: chrome-ball\nobject: {{type: sphere, radius_mm: {}, center_mm: [{}, 0, {}]}}\nmaterial: chrome\n"
-      "environment_radiance: 0.05\n",
-      radius_mm, x_mm, z_mm);
-}
 
 class DomeDemo {
  public:
@@ -345,6 +315,14 @@ class DomeDemo {
 };
 
 }  // namespace
+
+std::string chrome_sphere_scene(double radius_mm, double x_mm, double z_mm) {
+  // A chrome ball on a dark stand: the room is dim, so only the LED's reflection is bright.
+  return fmt::format(
+      "name: chrome-ball\nobject: {{type: sphere, radius_mm: {}, center_mm: [{}, 0, {}]}}\nmaterial: chrome\n"
+      "environment_radiance: 0.05\n",
+      radius_mm, x_mm, z_mm);
+}
 
 SolveSettings default_demo_solve() {
   SolveSettings settings;

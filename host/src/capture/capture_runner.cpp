@@ -100,6 +100,8 @@ void CaptureRunner::set_exposure(double exposure_us) {
 
 Batch CaptureRunner::run_batch(const std::vector<Shot>& shots) {
   if (shots.empty()) return {};
+  if (options_.stop_requested && options_.stop_requested())
+    throw CaptureStopped("the capture was stopped as asked");
   set_exposure(shots.front().exposure_us);
   Batch batch = hardware_ ? run_batch_once(shots) : run_software_batch(shots);
   for (int attempt = 0; attempt < options_.max_retakes && batch.taken.size() < shots.size(); ++attempt) {

@@ -123,6 +123,9 @@ CaptureReport run_capture(const Rig& rig, ControllerClient& controller, camera::
     ++report.taken_now;
     writer.write_index(false);
     progress.advance();
+    if (options.on_progress)
+      options.on_progress(
+          {writer.frame_count(), plan.frames.size(), plan.frames[frame].led_id, report.taken_now});
   });
   progress.finish();
   writer.write_index(true);
@@ -158,6 +161,9 @@ CaptureReport capture_stack(const Rig& rig, ControllerClient& controller, camera
     return run_capture(rig, controller, cam, options, runner, response ? &*response : nullptr);
   } catch (const InputError&) {
     throw;
+  } catch (const CaptureStopped& e) {
+    throw CaptureStopped(fmt::format("{}; the frames taken so far are kept in {} (resume completes it)",
+                                     e.what(), options.out.string()));
   } catch (const Error& e) {
     // The controller, the camera or the link failed: say what is kept and how to go on.
     throw Error(fmt::format("{}; the frames taken so far are kept in {} (complete it with --resume)",

@@ -2,15 +2,33 @@
 // What `lightstage capture` is asked to do: shared by the planner, the runner
 // and the stack writer of a capture (capture_session.hpp composes them).
 
+#include "lightstage/common/error.hpp"
 #include "lightstage/host/progress.hpp"
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace lightstage {
+
+// Where a capture is, after a frame was written.
+struct CaptureProgress {
+  std::size_t frames = 0;  // frames on disk (resumed ones included)
+  std::size_t total = 0;   // frames planned
+  int led_id = -1;         // the LED of the frame just written
+  std::size_t taken_now = 0;
+};
+
+// The capture stopped because it was asked to, between two controller
+// sequences (the dome dark): every frame taken is kept; resume completes it.
+class CaptureStopped : public Error {
+ public:
+  using Error::Error;
+};
 
 struct CaptureOptions {
   std::filesystem::path out;
@@ -34,6 +52,11 @@ struct CaptureOptions {
   // not linear: frames and darks are linearised and written as float PFM.
   std::filesystem::path response;
   OutputMode mode = OutputMode::kHuman;
+  // For a program that follows the capture (the operator's station): told
+  // after each frame is written, and asked before each controller sequence
+  // (preview, darks, frames) whether to stop there (CaptureStopped).
+  std::function<void(const CaptureProgress&)> on_progress;
+  std::function<bool()> stop_requested;
 
   void check() const;  // throws InputError naming the option
 };

@@ -20,6 +20,10 @@
 
 namespace lightstage::pipeline {
 
+// lightstage-sim's scene of a chrome sphere (radius, centre in the dome
+// frame, mm) on a dark stand: the light calibration's target.
+std::string chrome_sphere_scene(double radius_mm, double x_mm, double z_mm);
+
 // Lambertian least squares without the observations at or below 0.02: a
 // capture has shadows.
 SolveSettings default_demo_solve();

@@ -1,0 +1,525 @@
+#include "lightstage/station/station.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/common/log.hpp"
+#include "lightstage/host/calibration/calibrate_lights.hpp"
+#include "lightstage/host/calibration/calibration_output.hpp"
+#include "lightstage/host/capture/capture_session.hpp"
+#include "lightstage/host/controller/sequences.hpp"
+#include "lightstage/host/report/report.hpp"
+#include "lightstage/pipeline/integrate_folder.hpp"
+#include "lightstage/pipeline/solve_folder.hpp"
+#include "lightstage/pipeline/solve_methods.hpp"
+#include "lightstage/station/operator_access.hpp"
+#include "lightstage/station/preview_figures.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <fstream>
+
+namespace lightstage::station {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+nlohmann::json read_json_or_null(const fs::path& file) {
+  std::ifstream in(file);
+  if (!in) return nullptr;
+  return nlohmann::json::parse(in, nullptr, false);  // discarded (not thrown) when malformed
+}
+
+// Written beside, then renamed: never half a file.
+void write_json_atomically(const fs::path& file, const nlohmann::json& value) {
+  fs::create_directories(file.parent_path());
+  const fs::path partial = file.string() + ".partial";
+  {
+    std::ofstream out(partial);
+    out << value.dump(2) << "\n";
+    if (!out) throw Error(fmt::format("cannot write {}", partial.string()));
+  }
+  fs::rename(partial, file);
+}
+
+nlohmann::json controller_json(const proto::Info& info, const proto::Status& status) {
+  return {{"firmware", info.firmware_version()},
+          {"rig", info.rig_name()},
+          {"watchdog_ms", info.capabilities().watchdog_timeout_ms()},
+          {"state", proto::Status::State_Name(status.state())},
+          {"leds_on", std::vector<std::uint32_t>(status.leds_on().begin(), status.leds_on().end())},
+          {"last_fault", status.last_fault()}};
+}
+
+}  // namespace
+
+Station::Station(StationOptions options) : options_(std::move(options)), rig_(load_rig(options_.rig)) {
+  for (const char* kind : {"stacks", "calibrations", "results", "surfaces", ".station"})
+    fs::create_directories(options_.data / kind);
+  if (options_.simulated) {
+    SimulatedBenchOptions bench = *options_.simulated;
+    bench.rig = options_.rig;
+    if (bench.log_dir.empty()) bench.log_dir = options_.data / ".station" / "dome";
+    bench_ = std::make_unique<SimulatedBench>(bench);
+  }
+  // Connected at once, so a wrong URI shows when the page first loads; not fatal: the page says why.
+  const std::lock_guard lock(dome_mutex_);
+  try {
+    dome();
+  } catch (const std::exception& e) {
+    drop_dome(e.what());
+  }
+}
+
+Station::~Station() {
+  {
+    const std::lock_guard lock(job_mutex_);
+    if (job_) job_->request_stop();
+  }
+  wait_job();
+  const std::lock_guard lock(dome_mutex_);
+  try {
+    if (dome_) dome_->controller->all_off();
+  } catch (const std::exception& e) {
+    logger("station")->warn("could not darken the dome on the way out (its watchdog will): {}", e.what());
+  }
+}
+
+pipeline::DomeConnection& Station::dome() {
+  if (!dome_) {
+    const std::string controller = bench_ ? bench_->controller_uri() : options_.controller_uri;
+    const std::string camera = bench_ ? bench_->camera_uri() : options_.camera_uri;
+    dome_ = pipeline::connect_dome(options_.rig, controller, camera);
+    const std::lock_guard lock(state_mutex_);
+    dome_error_.clear();
+  }
+  return *dome_;
+}
+
+void Station::drop_dome(const std::string& why) {
+  dome_.reset();
+  const std::lock_guard lock(state_mutex_);
+  dome_error_ = why;
+  controller_ = nullptr;
+  lit_.clear();
+  lit_by_hand_ = false;
+}
+
+void Station::set_lit(std::vector<std::pair<std::uint32_t, float>> lit, bool by_hand) {
+  const std::lock_guard lock(state_mutex_);
+  lit_ = std::move(lit);
+  lit_by_hand_ = by_hand && !lit_.empty();
+}
+
+bool Station::lit_by_hand() const {
+  const std::lock_guard lock(state_mutex_);
+  return lit_by_hand_;
+}
+
+nlohmann::json Station::status() {
+  // The controller is asked only when no job talks to it; otherwise its last answer stands.
+  if (std::unique_lock lock(dome_mutex_, std::try_to_lock); lock.owns_lock()) {
+    try {
+      auto& connection = dome();
+      const proto::Status status = connection.controller->status();
+      const std::lock_guard state(state_mutex_);
+      controller_ = controller_json(connection.controller->info(), status);
+    } catch (const std::exception& e) {
+      drop_dome(e.what());
+    }
+  }
+  nlohmann::json j = {{"rig", {{"name", rig_.name}, {"leds", rig_.leds.size()}}},
+                      {"data", options_.data.string()}};
+  {
+    const std::lock_guard lock(state_mutex_);
+    nlohmann::json lit = nlohmann::json::array();
+    for (const auto& [id, level] : lit_) lit.push_back({{"id", id}, {"level", level}});
+    j["dome"] = {{"connected", controller_ != nullptr && dome_error_.empty()},
+                 {"error", dome_error_},
+                 {"controller", controller_},
+                 {"lit", lit},
+                 {"lit_by_hand", lit_by_hand_}};
+  }
+  j["job"] = job_json();
+  j["simulated"] = bench_ ? bench_->to_json() : nlohmann::json(nullptr);
+  return j;
+}
+
+nlohmann::json Station::rig_json() const {
+  nlohmann::json leds = nlohmann::json::array();
+  for (const Led& led : rig_.leds) {
+    const Vec3 d = rig_.light_direction(led);
+    leds.push_back({{"id", led.id},
+                    {"direction", {d.x(), d.y(), d.z()}},
+                    {"colour", led.colour},
+                    {"max_on_us", led.limits.max_on_us}});
+  }
+  return {{"name", rig_.name},
+          {"camera", {{"width", rig_.camera.width}, {"height", rig_.camera.height}}},
+          {"leds", leds}};
+}
+
+std::vector<std::string> Station::methods() const { return pipeline::solve_method_names(); }
+
+fs::path Station::folder(const char* kind, const std::string& name) const {
+  return options_.data / kind / name;
+}
+
+nlohmann::json Station::data_json() const {
+  const auto names = [&](const char* kind) {
+    std::vector<std::string> list;
+    for (const auto& entry : fs::directory_iterator(options_.data / kind)) {
+      if (entry.is_directory() && entry.path().filename().string().front() != '.')
+        list.push_back(entry.path().filename().string());
+    }
+    std::sort(list.begin(), list.end());
+    return list;
+  };
+  nlohmann::json stacks = nlohmann::json::array();
+  for (const std::string& name : names("stacks")) {
+    const nlohmann::json manifest = read_json_or_null(folder("stacks", name) / "manifest.json");
+    nlohmann::json stack = {{"name", name}, {"frames", 0}, {"planned", nullptr}, {"complete", false}};
+    if (manifest.is_object() && manifest.contains("capture")) {
+      const nlohmann::json& capture = manifest["capture"];
+      stack["frames"] = manifest.value("frames", nlohmann::json::array()).size();
+      stack["planned"] = capture.value("plan_led_ids", nlohmann::json::array()).size();
+      stack["complete"] = capture.value("complete", false);
+      stack["width"] = manifest.value("width", 0);
+      stack["height"] = manifest.value("height", 0);
+    }
+    stack["resumable"] = !stack["complete"].get<bool>() &&
+                         fs::exists(options_.data / ".station" / "captures" / (name + ".json"));
+    stacks.push_back(stack);
+  }
+  nlohmann::json calibrations = nlohmann::json::array();
+  for (const std::string& name : names("calibrations")) {
+    const fs::path dir = folder("calibrations", name);
+    calibrations.push_back(
+        {{"name", name},
+         {"ready", fs::exists(dir / "calibration.json")},
+         {"plot", fs::exists(dir / "lights_hemisphere.png") ? "lights_hemisphere.png" : ""}});
+  }
+  nlohmann::json results = nlohmann::json::array();
+  for (const std::string& name : names("results")) {
+    const fs::path dir = folder("results", name);
+    const nlohmann::json summary = read_json_or_null(dir / "summary.json");
+    nlohmann::json files = nlohmann::json::array();
+    for (const char* file : {"report.html", "normal.png", "normal.exr", "albedo.png", "summary.json"}) {
+      if (fs::exists(dir / file)) files.push_back(std::string("results/") + name + "/" + file);
+    }
+    for (const char* file : {"depth.pfm", "mesh.ply", "mesh.obj"}) {
+      if (fs::exists(folder("surfaces", name) / file))
+        files.push_back(std::string("surfaces/") + name + "/" + file);
+    }
+    results.push_back({{"name", name},
+                       {"method", summary.is_object() ? summary.value("method", "") : ""},
+                       {"files", files}});
+  }
+  return {{"stacks", stacks}, {"calibrations", calibrations}, {"results", results}};
+}
+
+void Station::set_leds(const LedsRequest& request) {
+  for (const auto& [id, level] : request.levels) {
+    if (std::none_of(rig_.leds.begin(), rig_.leds.end(),
+                     [id = id](const Led& led) { return led.id == static_cast<int>(id); }))
+      throw Refused(400, fmt::format("leds: the rig '{}' has no LED {}", rig_.name, id));
+  }
+  std::unique_lock lock(dome_mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) throw Refused(409, "the dome is busy with the running job");
+  try {
+    dome().controller->set_leds(request.levels);
+  } catch (const ControllerError& e) {
+    throw Refused(409, fmt::format("the controller refused: {}", e.what()));
+  } catch (const std::exception& e) {
+    drop_dome(e.what());
+    throw;
+  }
+  set_lit(request.levels, true);
+}
+
+void Station::dark() {
+  {
+    const std::lock_guard lock(job_mutex_);
+    if (job_ && job_->running()) job_->request_stop();  // its controller sequence ends dark
+  }
+  std::unique_lock lock(dome_mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) return;
+  try {
+    if (dome_) dome_->controller->all_off();
+    set_lit({}, false);
+  } catch (const std::exception& e) {
+    drop_dome(e.what());
+    throw;
+  }
+}
+
+Preview Station::preview(const PreviewRequest& request) {
+  try {
+    rig_.led(static_cast<int>(request.led));
+  } catch (const InputError&) {
+    throw Refused(400, fmt::format("preview.led: the rig '{}' has no LED {}", rig_.name, request.led));
+  }
+  std::unique_lock lock(dome_mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) throw Refused(409, "the dome is busy with the running job");
+  CaptureOptions options;
+  options.gain = request.gain;
+  options.mode = OutputMode::kQuiet;
+  std::vector<cv::Mat> frames;
+  try {
+    auto& connection = dome();
+    set_lit({{request.led, 1.0f}}, false);
+    frames = capture_bracket(rig_, *connection.controller, *connection.camera, static_cast<int>(request.led),
+                             {request.exposure_us}, options);
+    set_lit({}, false);
+  } catch (const InputError& e) {
+    set_lit({}, false);
+    throw Refused(400, e.what());
+  } catch (const std::exception& e) {
+    drop_dome(e.what());
+    throw;
+  }
+  return {encode_preview_png(frames.front()), preview_figures(frames.front())};
+}
+
+void Station::place(const std::string& what) {
+  if (!bench_) throw Refused(400, "place: this station runs a real dome; place the object by hand");
+  {
+    const std::lock_guard lock(job_mutex_);
+    if (job_ && job_->running()) throw Refused(409, fmt::format("a {} is running", job_->kind()));
+  }
+  const std::lock_guard lock(dome_mutex_);
+  drop_dome("");
+  bench_->place(what);
+  try {
+    dome();
+  } catch (const std::exception& e) {
+    drop_dome(e.what());
+  }
+}
+
+nlohmann::json Station::start_job(const std::string& kind, nlohmann::json request, Work work) {
+  const std::lock_guard lock(job_mutex_);
+  if (job_ && job_->running())
+    throw Refused(409, fmt::format("a {} is running: stop it or wait for it to end", job_->kind()));
+  job_.reset();  // the last one ended: its thread is joined
+  job_ = std::make_unique<StationJob>(next_job_id_++, kind, std::move(request), std::move(work));
+  return job_->to_json();
+}
+
+void Station::stop_job() {
+  const std::lock_guard lock(job_mutex_);
+  if (!job_ || !job_->running()) throw Refused(409, "no job is running");
+  job_->request_stop();
+}
+
+nlohmann::json Station::job_json() const {
+  const std::lock_guard lock(job_mutex_);
+  return job_ ? job_->to_json() : nlohmann::json(nullptr);
+}
+
+void Station::wait_job() {
+  StationJob* job = nullptr;
+  {
+    const std::lock_guard lock(job_mutex_);
+    job = job_.get();
+  }
+  if (job) job->wait();
+}
+
+nlohmann::json Station::start_test_sequence() {
+  return start_job("test-sequence", nlohmann::json::object(),
+                   [this](StationJob& job) { return test_sequence_work(job); });
+}
+
+nlohmann::json Station::test_sequence_work(StationJob& job) {
+  const std::lock_guard lock(dome_mutex_);
+  try {
+    ControllerClient& controller = *dome().controller;
+    const std::vector<std::uint32_t> ids = led_ids(controller.info());
+    job.progress(0, ids.size(), "LEDs");
+    std::size_t steps = 0;
+    const SequenceRun run = controller.run_sequence(one_led_per_step(ids, OneLedPerStepOptions{}, 1),
+                                                    [&](const proto::StepEvent& step) {
+                                                      std::vector<std::pair<std::uint32_t, float>> lit;
+                                                      for (const std::uint32_t id : step.led_ids())
+                                                        lit.emplace_back(id, 1.0f);
+                                                      set_lit(std::move(lit), false);
+                                                      job.progress(++steps, ids.size(), "LEDs");
+                                                    });
+    set_lit({}, false);
+    const LatenessStats lateness = lateness_stats(run.steps);
+    if (!run.ok())
+      throw Error(fmt::format("the test sequence ended early: {} {}", proto::Outcome_Name(run.done.outcome()),
+                              run.done.detail()));
+    return {{"steps", run.steps.size()},
+            {"lateness_us",
+             {{"median", lateness.median_ns / 1e3},
+              {"p99", lateness.p99_ns / 1e3},
+              {"max", lateness.max_ns / 1e3}}}};
+  } catch (const ControllerError&) {
+    set_lit({}, false);
+    throw;
+  } catch (const std::exception& e) {
+    drop_dome(e.what());
+    throw;
+  }
+}
+
+nlohmann::json Station::start_capture(const CaptureRequest& request) {
+  const fs::path out = folder("stacks", request.name);
+  if (fs::exists(out))
+    throw Refused(409,
+                  fmt::format("stacks/{} exists: resume it, or capture under another name", request.name));
+  // The request is kept so that a resume (after a stop, a crash, a lost link) repeats it exactly.
+  write_json_atomically(options_.data / ".station" / "captures" / (request.name + ".json"),
+                        request.to_json());
+  return start_job("capture", request.to_json(),
+                   [this, request](StationJob& job) { return capture_work(job, request, false); });
+}
+
+nlohmann::json Station::resume_capture(const std::string& name) {
+  check_folder_name(name, "resume.name");
+  const nlohmann::json asked = read_json_or_null(options_.data / ".station" / "captures" / (name + ".json"));
+  if (!asked.is_object())
+    throw Refused(404, fmt::format("stacks/{}: no capture of this station to resume", name));
+  const CaptureRequest request = capture_request(asked);
+  nlohmann::json shown = request.to_json();
+  shown["resume"] = true;
+  return start_job("capture", shown,
+                   [this, request](StationJob& job) { return capture_work(job, request, true); });
+}
+
+nlohmann::json Station::capture_work(StationJob& job, const CaptureRequest& request, bool resume) {
+  CaptureOptions options;
+  options.out = folder("stacks", request.name);
+  options.resume = resume;
+  options.exposure_us = request.exposure_us;
+  options.dark_frames = request.dark_frames;
+  options.bracket_stops = request.bracket_stops;
+  options.led_ids = request.led_ids;
+  if (request.chrome_sphere) {
+    options.auto_percentile = 1.0;
+    options.auto_target = 0.7;
+  }
+  options.mode = OutputMode::kQuiet;
+  options.on_progress = [&](const CaptureProgress& progress) {
+    job.progress(progress.frames, progress.total, "frames");
+    set_lit({{static_cast<std::uint32_t>(progress.led_id), 1.0f}}, false);
+  };
+  options.stop_requested = [&] { return job.stop_requested(); };
+  job.say(resume ? "resuming" : "capturing");
+  const std::lock_guard lock(dome_mutex_);
+  try {
+    auto& connection = dome();
+    const CaptureReport report = capture_stack(rig_, *connection.controller, *connection.camera, options);
+    set_lit({}, false);
+    nlohmann::json result = report.to_json();
+    result["stack"] = request.name;
+    return result;
+  } catch (const InputError&) {
+    set_lit({}, false);
+    throw;
+  } catch (const CaptureStopped&) {
+    set_lit({}, false);
+    throw;
+  } catch (const std::exception& e) {
+    drop_dome(e.what());
+    throw;
+  }
+}
+
+nlohmann::json Station::start_calibration(const CalibrationRequest& request) {
+  for (const std::string& stack : request.stacks) {
+    if (!fs::exists(folder("stacks", stack) / "manifest.json"))
+      throw Refused(404, fmt::format("calibration.stacks: no stack '{}'", stack));
+  }
+  if (fs::exists(folder("calibrations", request.name)))
+    throw Refused(409, fmt::format("calibrations/{} exists: choose another name", request.name));
+  return start_job("calibration", request.to_json(),
+                   [this, request](StationJob& job) { return calibration_work(job, request); });
+}
+
+nlohmann::json Station::calibration_work(StationJob& job, const CalibrationRequest& request) {
+  calibration::LightCalibrationOptions options;
+  for (const std::string& stack : request.stacks) options.inputs.push_back(folder("stacks", stack));
+  options.rig = options_.rig;
+  // Two positions or more: LED positions triangulated, no help from the nominal dome.
+  if (options.inputs.size() >= 2) options.dome_radius_mm = 0;
+  options.sphere_z_mm = {rig_.object_position_mm.z()};
+  if (request.circle) {
+    calibration::ImageCircle circle;
+    circle.centre_px = Vec2(request.circle->x_px, request.circle->y_px);
+    circle.radius_px = request.circle->radius_px;
+    circle.source = "given";
+    options.given_circles = {circle};
+  }
+  options.allow_missing = request.allow_missing;
+  job.say("finding the highlights");
+  const auto run = calibration::calibrate_lights(options);
+  const fs::path out = folder("calibrations", request.name);
+  nlohmann::json written = calibration::write_calibration_outputs(out, run, options.inputs);
+  std::size_t measured = 0;
+  for (const auto& light : run.calibration.lights) measured += light.measured ? 1 : 0;
+  return {{"name", request.name},   {"lights", run.calibration.lights.size()},
+          {"measured", measured},   {"problems", run.calibration.problems},
+          {"seconds", run.seconds}, {"written", written}};
+}
+
+nlohmann::json Station::start_solve(const SolveRequest& request) {
+  const auto names = methods();
+  if (std::find(names.begin(), names.end(), request.method) == names.end())
+    throw Refused(
+        400, fmt::format("solve.method: '{}' is not a method (GET /api/methods lists them)", request.method));
+  if (!fs::exists(folder("stacks", request.stack) / "manifest.json"))
+    throw Refused(404, fmt::format("solve.stack: no stack '{}'", request.stack));
+  if (!request.calibration.empty() &&
+      !fs::exists(folder("calibrations", request.calibration) / "calibration.json"))
+    throw Refused(404, fmt::format("solve.calibration: no calibration '{}'", request.calibration));
+  for (const char* kind : {"results", "surfaces"}) {
+    if (fs::exists(folder(kind, request.name)))
+      throw Refused(409, fmt::format("{}/{} exists: choose another name", kind, request.name));
+  }
+  return start_job("solve", request.to_json(),
+                   [this, request](StationJob& job) { return solve_work(job, request); });
+}
+
+nlohmann::json Station::solve_work(StationJob& job, const SolveRequest& request) {
+  const fs::path stack = folder("stacks", request.stack);
+  const fs::path out = folder("results", request.name);
+  pipeline::SolveSettings settings;
+  settings.method = request.method;
+  settings.resolve();
+  pipeline::SolveCalibration calibration;
+  if (!request.calibration.empty())
+    calibration.file = folder("calibrations", request.calibration) / "calibration.json";
+  job.say("solving");
+  const pipeline::SolveReport solved =
+      pipeline::solve_folder(stack, settings, out, calibration, [&job](const pipeline::SolveWork& work) {
+        auto done = std::make_shared<std::atomic<std::size_t>>(0);
+        job.progress(0, work.total, work.unit);
+        return SolveProgress(
+            [&job, done, work](std::size_t items) { job.progress(*done += items, work.total, work.unit); });
+      });
+  job.say("integrating the surface");
+  pipeline::IntegrateSettings integrate;
+  integrate.input = out.string();
+  const fs::path surface = folder("surfaces", request.name);
+  integrate.out = surface.string();
+  // Orthographic: the rig camera's pixel at the object, scaled to the stack's width.
+  const int width = solved.summary.value("width", rig_.camera.width);
+  integrate.pixel_mm = rig_.camera.pixel_pitch_mm * rig_.camera.width / std::max(1, width);
+  pipeline::integrate_folder(integrate);
+  job.say("writing the report");
+  report::ReportOptions report_options;
+  report_options.stack = stack;
+  if (!calibration.file.empty()) report_options.calibration = calibration.file;
+  report_options.depth = surface;
+  report::write_report(out, out / "report.html", report_options);
+  nlohmann::json result = {{"name", request.name},
+                           {"report", "results/" + request.name + "/report.html"},
+                           {"surface", "surfaces/" + request.name}};
+  if (solved.error) result["error_vs_ground_truth"] = solved.error->to_json();
+  return result;
+}
+
+}  // namespace lightstage::station

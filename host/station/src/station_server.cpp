@@ -1,0 +1,310 @@
+#include "lightstage/station/station_server.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/common/log.hpp"
+
+#include <httplib.h>
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <map>
+
+namespace lightstage::station {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+void answer_json(httplib::Response& response, int status, const nlohmann::json& body) {
+  response.status = status;
+  response.set_header("Cache-Control", "no-store");
+  response.set_content(body.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
+                       "application/json");
+}
+
+void answer_error(httplib::Response& response, int status, const std::string& message) {
+  answer_json(response, status, {{"error", message}, {"status", status}});
+}
+
+std::string client_of(const httplib::Request& request) {
+  std::string client = request.get_header_value("X-Lightstage-Client");
+  if (client.size() > 128) client.resize(128);
+  return client;
+}
+
+nlohmann::json parse_body(const httplib::Request& request) {
+  if (request.body.empty()) return nlohmann::json::object();
+  try {
+    return nlohmann::json::parse(request.body);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw Refused(400, fmt::format("the body is not JSON: {}", e.what()));
+  }
+}
+
+const char* content_type(const fs::path& file) {
+  static const std::map<std::string, const char*> types = {{".html", "text/html; charset=utf-8"},
+                                                           {".json", "application/json"},
+                                                           {".png", "image/png"},
+                                                           {".svg", "image/svg+xml"},
+                                                           {".txt", "text/plain; charset=utf-8"},
+                                                           {".lp", "text/plain; charset=utf-8"},
+                                                           {".log", "text/plain; charset=utf-8"},
+                                                           {".csv", "text/csv"}};
+  const auto found = types.find(file.extension().string());
+  return found == types.end() ? "application/octet-stream" : found->second;
+}
+
+// The file under `root` that `relative` names, or nothing when it leaves root or is not a file.
+std::optional<fs::path> contained_file(const fs::path& root, const std::string& relative) {
+  std::error_code error;
+  const fs::path base = fs::canonical(root, error);
+  if (error) return std::nullopt;
+  const fs::path file = fs::weakly_canonical(base / relative, error);
+  if (error) return std::nullopt;
+  const auto [end, _] = std::mismatch(base.begin(), base.end(), file.begin(), file.end());
+  if (end != base.end() || !fs::is_regular_file(file)) return std::nullopt;
+  return file;
+}
+
+}  // namespace
+
+StationServer::StationServer(Station& station, ServerOptions options)
+    : station_(station),
+      options_(std::move(options)),
+      access_({options_.token, options_.lease}),
+      audit_(station.data() / "audit.log"),
+      server_(std::make_unique<httplib::Server>()) {
+  if (!is_loopback_address(options_.host) && options_.token.empty())
+    throw InputError(fmt::format(
+        "--listen {}: any address but loopback needs a token (give --token, or let the station make one)",
+        options_.host));
+  server_->set_payload_max_length(options_.max_body_bytes);
+  routes();
+  watcher_ = std::thread([this] { watch_leases(); });
+}
+
+StationServer::~StationServer() {
+  stop();
+  {
+    const std::lock_guard lock(watch_mutex_);
+    stopping_ = true;
+  }
+  watch_changed_.notify_all();
+  if (watcher_.joinable()) watcher_.join();
+}
+
+int StationServer::bind() {
+  if (options_.port == 0) {
+    port_ = server_->bind_to_any_port(options_.host);
+  } else {
+    port_ = server_->bind_to_port(options_.host, options_.port) ? options_.port : -1;
+  }
+  if (port_ <= 0)
+    throw Error(fmt::format("cannot listen on {}:{} (in use, or not an address of this machine)",
+                            options_.host, options_.port));
+  return port_;
+}
+
+void StationServer::run() { server_->listen_after_bind(); }
+
+void StationServer::stop() { server_->stop(); }
+
+std::string StationServer::url() const {
+  const std::string host =
+      options_.host.find(':') != std::string::npos ? "[" + options_.host + "]" : options_.host;
+  std::string url = fmt::format("http://{}:{}/", host, port_);
+  if (!options_.token.empty()) url += "?token=" + options_.token;
+  return url;
+}
+
+// An operator who lit LEDs by hand and went away (a closed tab, a lost
+// network) leaves them lit no longer than the lease.
+void StationServer::watch_leases() {
+  std::unique_lock lock(watch_mutex_);
+  while (!watch_changed_.wait_for(lock, std::chrono::milliseconds(250), [this] { return stopping_; })) {
+    if (!access_.lapsed(Clock::now()) || !station_.lit_by_hand()) continue;
+    AuditEntry entry{"", "station", "", "dark", {{"why", "the operator's lease lapsed"}}, "ok"};
+    try {
+      station_.dark();
+    } catch (const std::exception& e) {
+      entry.outcome = fmt::format("failed: {}", e.what());
+    }
+    audit_.record(entry);
+  }
+}
+
+void StationServer::check_token(const httplib::Request& request) const {
+  std::string presented = request.get_param_value("token");
+  const std::string header = request.get_header_value("Authorization");
+  if (header.rfind("Bearer ", 0) == 0) presented = header.substr(7);
+  access_.check_token(presented);
+}
+
+void StationServer::read(const std::string& pattern, std::function<nlohmann::json()> answer) {
+  server_->Get(pattern, [this, answer](const httplib::Request& request, httplib::Response& response) {
+    try {
+      check_token(request);
+      access_.touch(client_of(request), Clock::now());
+      answer_json(response, 200, answer());
+    } catch (const Refused& e) {
+      answer_error(response, e.status(), e.what());
+    }
+  });
+}
+
+void StationServer::action(const std::string& pattern, const std::string& name, bool needs_control,
+                           Action act) {
+  server_->Post(pattern, [this, name, needs_control, act](const httplib::Request& request,
+                                                          httplib::Response& response) {
+    const std::string client = client_of(request);
+    AuditEntry entry{client, "", request.remote_addr, name, nlohmann::json::object(), "ok"};
+    try {
+      check_token(request);
+      const nlohmann::json body = parse_body(request);
+      entry.details = body;
+      if (needs_control) access_.require_operator(client, Clock::now());
+      answer_json(response, 200, act(body, client));
+    } catch (const Refused& e) {
+      entry.outcome = fmt::format("refused: {}", e.what());
+      answer_error(response, e.status(), e.what());
+    } catch (const InputError& e) {
+      entry.outcome = fmt::format("refused: {}", e.what());
+      answer_error(response, 400, e.what());
+    } catch (const std::exception& e) {
+      entry.outcome = fmt::format("failed: {}", e.what());
+      answer_error(response, 500, e.what());
+    }
+    if (entry.details.is_object() && entry.details.contains("token")) entry.details.erase("token");
+    entry.name = access_.name_of(client);
+    audit_.record(entry);
+  });
+}
+
+void StationServer::routes() {
+  server_->set_exception_handler(
+      [](const httplib::Request&, httplib::Response& response, std::exception_ptr thrown) {
+        std::string message = "internal error";
+        try {
+          std::rethrow_exception(thrown);
+        } catch (const std::exception& e) {
+          message = e.what();
+        } catch (...) {
+        }
+        answer_error(response, 500, message);
+      });
+  // httplib's own refusals (no route, body too large, bad request line) as JSON too.
+  server_->set_error_handler([](const httplib::Request& request, httplib::Response& response) {
+    if (!response.body.empty()) return;
+    std::string message = fmt::format("{} {}: no such resource", request.method, request.path);
+    if (response.status == 413) message = "the request body is too large";
+    if (response.status == 400) message = "malformed request";
+    answer_error(response, response.status, message);
+  });
+
+  read("/api/status", [this] { return station_.status(); });
+  server_->Get("/api/access", [this](const httplib::Request& request, httplib::Response& response) {
+    try {
+      check_token(request);
+      answer_json(response, 200, access_.to_json(client_of(request), Clock::now()));
+    } catch (const Refused& e) {
+      answer_error(response, e.status(), e.what());
+    }
+  });
+  read("/api/rig", [this] { return station_.rig_json(); });
+  read("/api/data", [this] { return station_.data_json(); });
+  read("/api/methods", [this] { return nlohmann::json(station_.methods()); });
+  read("/api/job", [this] { return station_.job_json(); });
+
+  action("/api/control", "control.take", false,
+         [this](const nlohmann::json& body, const std::string& client) {
+           std::string name = body.is_object() && body.contains("name") && body["name"].is_string()
+                                  ? body["name"].get<std::string>()
+                                  : std::string();
+           if (name.size() > 64) name.resize(64);
+           access_.take(client, name, Clock::now());
+           return access_.to_json(client, Clock::now());
+         });
+  action("/api/control/release", "control.release", false,
+         [this](const nlohmann::json&, const std::string& client) {
+           access_.release(client);
+           if (station_.lit_by_hand()) station_.dark();  // what this operator lit goes dark with them
+           return access_.to_json(client, Clock::now());
+         });
+  action("/api/leds", "leds.set", true, [this](const nlohmann::json& body, const std::string&) {
+    station_.set_leds(leds_request(body));
+    return station_.status()["dome"];
+  });
+  action("/api/dark", "dark", false, [this](const nlohmann::json&, const std::string&) {
+    station_.dark();
+    return station_.status()["dome"];
+  });
+  action("/api/place", "place", true, [this](const nlohmann::json& body, const std::string&) {
+    if (!body.contains("object") || !body["object"].is_string())
+      throw Refused(400, "place: the field 'object' is needed (\"object\", \"chrome-1\", ...)");
+    station_.place(body["object"].get<std::string>());
+    return station_.status();
+  });
+  action("/api/preview", "preview", true, [this](const nlohmann::json& body, const std::string&) {
+    Preview preview = station_.preview(preview_request(body));
+    const std::lock_guard lock(preview_mutex_);
+    preview_png_ = std::move(preview.png);
+    return preview.stats;
+  });
+  server_->Get("/api/preview.png", [this](const httplib::Request& request, httplib::Response& response) {
+    try {
+      check_token(request);
+      const std::lock_guard lock(preview_mutex_);
+      if (preview_png_.empty()) throw Refused(404, "no preview taken yet");
+      response.set_header("Cache-Control", "no-store");
+      response.set_content(preview_png_, "image/png");
+    } catch (const Refused& e) {
+      answer_error(response, e.status(), e.what());
+    }
+  });
+  action("/api/test-sequence", "test-sequence", true,
+         [this](const nlohmann::json&, const std::string&) { return station_.start_test_sequence(); });
+  action("/api/capture", "capture.start", true, [this](const nlohmann::json& body, const std::string&) {
+    return station_.start_capture(capture_request(body));
+  });
+  action("/api/capture/resume", "capture.resume", true,
+         [this](const nlohmann::json& body, const std::string&) {
+           if (!body.contains("name") || !body["name"].is_string())
+             throw Refused(400, "resume: the field 'name' (the stack to complete) is needed");
+           return station_.resume_capture(body["name"].get<std::string>());
+         });
+  action("/api/calibrate", "calibration.start", true, [this](const nlohmann::json& body, const std::string&) {
+    return station_.start_calibration(calibration_request(body));
+  });
+  action("/api/solve", "solve.start", true, [this](const nlohmann::json& body, const std::string&) {
+    return station_.start_solve(solve_request(body));
+  });
+  action("/api/job/stop", "job.stop", true, [this](const nlohmann::json&, const std::string&) {
+    station_.stop_job();
+    return station_.job_json();
+  });
+
+  server_->Get(R"(/files/((stacks|calibrations|results|surfaces)/.+))",
+               [this](const httplib::Request& request, httplib::Response& response) {
+                 try {
+                   check_token(request);
+                   const auto file = contained_file(station_.data(), request.matches[1].str());
+                   if (!file) throw Refused(404, fmt::format("no file {}", request.matches[1].str()));
+                   const auto size = static_cast<std::size_t>(fs::file_size(*file));
+                   auto in = std::make_shared<std::ifstream>(*file, std::ios::binary);
+                   response.set_content_provider(
+                       size, content_type(*file),
+                       [in](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
+                         std::vector<char> chunk(std::min<std::size_t>(length, 1 << 20));
+                         in->seekg(static_cast<std::streamoff>(offset));
+                         in->read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+                         if (in->gcount() <= 0) return false;
+                         return sink.write(chunk.data(), static_cast<std::size_t>(in->gcount()));
+                       });
+                 } catch (const Refused& e) {
+                   answer_error(response, e.status(), e.what());
+                 }
+               });
+}
+
+}  // namespace lightstage::station
