@@ -229,7 +229,8 @@ void Station::set_leds(const LedsRequest& request) {
   try {
     dome().controller->set_leds(request.levels);
   } catch (const ControllerError& e) {
-    throw Refused(409, fmt::format("the controller refused: {}", e.what()));
+    throw Refused(e.code() == proto::Error::BAD_REQUEST ? 400 : 409,
+                  fmt::format("the controller refused: {}", e.what()));
   } catch (const std::exception& e) {
     drop_dome(e.what());
     throw;

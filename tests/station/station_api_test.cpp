@@ -1,0 +1,344 @@
+// The station's HTTP API on the simulated dome (its programs as separate
+// processes): status, a capture followed to its end, stopped and resumed,
+// two operators, the token, bad requests, and LEDs left lit by a vanished operator.
+#include "lightstage/station/station_server.hpp"
+
+#include "lightstage/testing/paths.hpp"
+
+#include <httplib.h>
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <thread>
+
+namespace lightstage::station {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using std::chrono::milliseconds;
+using std::chrono::seconds;
+
+struct Answer {
+  int status = 0;
+  json body;
+  std::string text;
+};
+
+// The simulated dome (64x64 sphere, no noise), the station and its server on a free port.
+class StationUnderTest {
+ public:
+  explicit StationUnderTest(ServerOptions server_options = {}, const std::string& data_name = "data") {
+    StationOptions options;
+    options.rig = testing::source_dir() / "hw" / "rigs" / "sim-dome.yaml";
+    options.data = testing::scratch_dir() / data_name;
+    SimulatedBenchOptions bench;
+    bench.scene = "sphere";
+    bench.width = 64;
+    bench.height = 64;
+    bench.noise = "none";
+    bench.programs = testing::bin_dir();
+    options.simulated = bench;
+    station_ = std::make_unique<Station>(options);
+    server_options.port = 0;
+    server_ = std::make_unique<StationServer>(*station_, server_options);
+    port_ = server_->bind();
+    thread_ = std::thread([this] { server_->run(); });
+  }
+  ~StationUnderTest() {
+    server_->stop();
+    thread_.join();
+  }
+
+  Answer get(const std::string& path, const std::string& client = "tab-a", const std::string& token = "") {
+    httplib::Client http("127.0.0.1", port_);
+    httplib::Headers headers = {{"X-Lightstage-Client", client}};
+    if (!token.empty()) headers.emplace("Authorization", "Bearer " + token);
+    return answer(http.Get(path, headers));
+  }
+  Answer post(const std::string& path, const std::string& body, const std::string& client = "tab-a",
+              const std::string& token = "") {
+    httplib::Client http("127.0.0.1", port_);
+    httplib::Headers headers = {{"X-Lightstage-Client", client}};
+    if (!token.empty()) headers.emplace("Authorization", "Bearer " + token);
+    return answer(http.Post(path, headers, body, "application/json"));
+  }
+  Answer post(const std::string& path, const json& body, const std::string& client = "tab-a") {
+    return post(path, body.dump(), client);
+  }
+  // Polls the job (as `client`, which keeps its lease) until it is no longer running.
+  json wait_job(const std::string& client = "tab-a", seconds timeout = seconds(120)) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    json job;
+    do {
+      job = get("/api/job", client).body;
+      if (job.is_object() && job["state"] != "running") return job;
+      std::this_thread::sleep_for(milliseconds(50));
+    } while (std::chrono::steady_clock::now() < deadline);
+    ADD_FAILURE() << "the job did not end: " << job.dump();
+    return job;
+  }
+  Station& station() { return *station_; }
+  int port() const { return port_; }
+
+ private:
+  static Answer answer(const httplib::Result& result) {
+    if (!result) return {-1, nullptr, "no answer"};
+    Answer a{result->status, json::parse(result->body, nullptr, false), result->body};
+    return a;
+  }
+
+  std::unique_ptr<Station> station_;
+  std::unique_ptr<StationServer> server_;
+  int port_ = 0;
+  std::thread thread_;
+};
+
+std::vector<json> audit_lines(const fs::path& data) {
+  std::vector<json> lines;
+  std::ifstream in(data / "audit.log");
+  for (std::string line; std::getline(in, line);) lines.push_back(json::parse(line));
+  return lines;
+}
+
+const json kCapture = {{"name", "sphere"}, {"exposure_us", 4000}, {"dark_frames", 2}};
+
+TEST(StationApi, StatusIsJsonAndEveryClientMayRead) {
+  StationUnderTest station;
+  const Answer status = station.get("/api/status", "someone");
+  ASSERT_EQ(status.status, 200) << status.text;
+  EXPECT_TRUE(status.body["dome"]["connected"].get<bool>()) << status.text;
+  EXPECT_EQ(status.body["dome"]["controller"]["state"], "IDLE");
+  EXPECT_EQ(status.body["rig"]["leds"], 96);
+  EXPECT_EQ(status.body["simulated"]["placed"], "object");
+  EXPECT_TRUE(status.body["job"].is_null());
+  EXPECT_EQ(station.get("/api/rig").body["leds"].size(), 96u);
+  const json methods = station.get("/api/methods").body;
+  EXPECT_NE(std::find(methods.begin(), methods.end(), "l2"), methods.end()) << methods.dump();
+  EXPECT_EQ(station.get("/api/access", "someone").body["you"], "viewer");
+}
+
+TEST(StationApi, ACaptureIsFollowedToItsEndThenSolvedWithItsReport) {
+  StationUnderTest station;
+  ASSERT_EQ(station.post("/api/control", json{{"name", "Ann"}}).status, 200);
+  const Answer started = station.post("/api/capture", kCapture);
+  ASSERT_EQ(started.status, 200) << started.text;
+  EXPECT_EQ(started.body["kind"], "capture");
+  // Followed from a second client (read-only) while it runs: the count only rises.
+  std::size_t last = 0;
+  bool saw_running = false;
+  json job;
+  for (int i = 0; i < 4000; ++i) {
+    job = station.get("/api/job", "tab-b").body;
+    station.get("/api/access", "tab-a");  // the operator's page keeps polling too
+    if (job["state"] != "running") break;
+    saw_running = true;
+    EXPECT_GE(job["done"].get<std::size_t>(), last);
+    last = job["done"];
+    std::this_thread::sleep_for(milliseconds(20));
+  }
+  EXPECT_TRUE(saw_running);
+  ASSERT_EQ(job["state"], "done") << job.dump();
+  EXPECT_EQ(job["done"], 96);
+  EXPECT_EQ(job["total"], 96);
+  EXPECT_EQ(job["result"]["frames"], 96);
+  const json stack = station.get("/api/data").body["stacks"][0];
+  EXPECT_EQ(stack["name"], "sphere");
+  EXPECT_TRUE(stack["complete"].get<bool>());
+  EXPECT_FALSE(stack["resumable"].get<bool>());
+  // The same name again is refused: nothing is overwritten.
+  const Answer again = station.post("/api/capture", kCapture);
+  EXPECT_EQ(again.status, 409) << again.text;
+
+  ASSERT_EQ(station.post("/api/solve", json{{"stack", "sphere"}, {"method", "l2"}}).status, 200);
+  const json solved = station.wait_job();
+  ASSERT_EQ(solved["state"], "done") << solved.dump();
+  const Answer report = station.get("/files/results/sphere-l2/report.html");
+  EXPECT_EQ(report.status, 200);
+  EXPECT_NE(report.text.find("<html"), std::string::npos);
+  EXPECT_EQ(station.get("/files/surfaces/sphere-l2/depth.pfm").status, 200);
+  EXPECT_EQ(station.get("/files/results/../../audit.log").status, 404);
+  EXPECT_EQ(station.get("/files/results/nothing.png").status, 404);
+
+  // Every action in the audit log, with who asked.
+  const auto lines = audit_lines(station.station().data());
+  const auto capture =
+      std::find_if(lines.begin(), lines.end(), [](const json& l) { return l["action"] == "capture.start"; });
+  ASSERT_NE(capture, lines.end());
+  EXPECT_EQ((*capture)["outcome"], "ok");
+  EXPECT_EQ((*capture)["client"], "tab-a");
+  EXPECT_EQ((*capture)["name"], "Ann");
+  EXPECT_EQ((*capture)["details"]["name"], "sphere");
+  const auto refused =
+      std::find_if(capture + 1, lines.end(), [](const json& l) { return l["action"] == "capture.start"; });
+  ASSERT_NE(refused, lines.end());
+  EXPECT_NE((*refused)["outcome"].get<std::string>().find("refused: stacks/sphere exists"), std::string::npos)
+      << refused->dump();
+}
+
+TEST(StationApi, AStoppedCaptureKeepsItsFramesAndResumesFromThePage) {
+  StationUnderTest station;
+  ASSERT_EQ(station.post("/api/control", json{{"name", "Ann"}}).status, 200);
+  ASSERT_EQ(station.post("/api/capture", kCapture).status, 200);
+  json job;
+  const auto deadline = std::chrono::steady_clock::now() + seconds(60);
+  do {
+    job = station.get("/api/job").body;
+    std::this_thread::sleep_for(milliseconds(5));
+  } while (job["state"] == "running" && job["done"].get<int>() < 20 &&
+           std::chrono::steady_clock::now() < deadline);
+  ASSERT_EQ(station.post("/api/job/stop", json::object()).status, 200);
+  job = station.wait_job();
+  ASSERT_EQ(job["state"], "stopped") << job.dump();
+  const json stack = station.get("/api/data").body["stacks"][0];
+  EXPECT_GE(stack["frames"].get<int>(), 20);
+  EXPECT_LT(stack["frames"].get<int>(), 96);
+  EXPECT_FALSE(stack["complete"].get<bool>());
+  EXPECT_TRUE(stack["resumable"].get<bool>());
+  // Stopped between controller sequences: the dome is dark.
+  EXPECT_TRUE(station.get("/api/status").body["dome"]["controller"]["leds_on"].empty());
+
+  ASSERT_EQ(station.post("/api/capture/resume", json{{"name", "sphere"}}).status, 200);
+  job = station.wait_job();
+  ASSERT_EQ(job["state"], "done") << job.dump();
+  EXPECT_EQ(job["result"]["frames"], 96);
+  EXPECT_LT(job["result"]["taken_now"].get<int>(), 96);
+  EXPECT_TRUE(station.get("/api/data").body["stacks"][0]["complete"].get<bool>());
+  EXPECT_EQ(station.post("/api/capture/resume", json{{"name", "unknown"}}).status, 404);
+}
+
+TEST(StationApi, TwoOperatorsTheSecondReadOnlyUntilTheFirstReleases) {
+  StationUnderTest station;
+  ASSERT_EQ(station.post("/api/control", json{{"name", "Ann"}}, "tab-a").status, 200);
+  const Answer taken = station.post("/api/control", json{{"name", "Bob"}}, "tab-b");
+  EXPECT_EQ(taken.status, 409);
+  EXPECT_NE(taken.body["error"].get<std::string>().find("Ann"), std::string::npos) << taken.text;
+  EXPECT_EQ(station.post("/api/leds", json{{"leds", {{{"id", 1}}}}}, "tab-b").status, 403);
+  EXPECT_EQ(station.post("/api/capture", kCapture, "tab-b").status, 403);
+  EXPECT_EQ(station.get("/api/status", "tab-b").status, 200);
+  EXPECT_EQ(station.get("/api/access", "tab-b").body["operator"], "Ann");
+  // Darkening the dome is open to everyone.
+  EXPECT_EQ(station.post("/api/dark", json::object(), "tab-b").status, 200);
+
+  const Answer lit = station.post("/api/leds", json{{"leds", {{{"id", 1}}, {{"id", 7}}}}}, "tab-a");
+  ASSERT_EQ(lit.status, 200) << lit.text;
+  EXPECT_EQ(lit.body["controller"]["leds_on"].size(), 2u) << lit.text;
+  EXPECT_EQ(station.post("/api/leds", json{{"leds", {{{"id", 999}}}}}, "tab-a").status, 400);
+  // This rig's drivers cannot dim: the controller's refusal comes back as it said it.
+  const Answer dimmed = station.post("/api/leds", json{{"leds", {{{"id", 7}, {"level", 0.5}}}}}, "tab-a");
+  EXPECT_EQ(dimmed.status, 400);
+  EXPECT_NE(dimmed.text.find("cannot dim"), std::string::npos) << dimmed.text;
+  // Releasing darkens what that operator lit, and hands over.
+  ASSERT_EQ(station.post("/api/control/release", json::object(), "tab-a").status, 200);
+  EXPECT_TRUE(station.get("/api/status").body["dome"]["controller"]["leds_on"].empty());
+  EXPECT_EQ(station.post("/api/control", json{{"name", "Bob"}}, "tab-b").status, 200);
+  EXPECT_EQ(station.get("/api/access", "tab-a").body["you"], "viewer");
+}
+
+TEST(StationApi, WithATokenEveryRequestMustCarryIt) {
+  ServerOptions options;
+  options.token = "4f1c0a7e9b2d4c6f8a0b1c2d3e4f5a6b";
+  StationUnderTest station(options);
+  EXPECT_EQ(station.get("/api/status").status, 401);
+  EXPECT_EQ(station.get("/api/status", "tab-a", "wrong").status, 401);
+  EXPECT_EQ(station.post("/api/control", "{}", "tab-a", "").status, 401);
+  EXPECT_EQ(station.get("/files/stacks/x").status, 401);
+  EXPECT_EQ(station.get("/api/status", "tab-a", options.token).status, 200);
+  EXPECT_EQ(station.get("/api/status?token=" + options.token).status, 200);
+  EXPECT_EQ(station.post("/api/control", "{\"name\": \"Ann\"}", "tab-a", options.token).status, 200);
+}
+
+TEST(StationApi, NoTokenIsRefusedOffLoopback) {
+  StationOptions options;
+  options.rig = testing::source_dir() / "hw" / "rigs" / "sim-dome.yaml";
+  options.data = testing::scratch_dir() / "data";
+  options.controller_uri = "unix:/nonexistent/domed.sock";
+  options.camera_uri = "sim:/nonexistent/camera.sock";
+  Station station(options);  // a dome that does not answer: the station still starts, and says why
+  EXPECT_FALSE(station.status()["dome"]["connected"].get<bool>());
+  EXPECT_FALSE(station.status()["dome"]["error"].get<std::string>().empty());
+  ServerOptions server;
+  server.host = "0.0.0.0";
+  EXPECT_THROW(StationServer(station, server), InputError);
+}
+
+TEST(StationApi, MalformedUnknownAndOversizedRequestsGetJsonErrors) {
+  ServerOptions options;
+  options.max_body_bytes = 4096;
+  StationUnderTest station(options);
+  ASSERT_EQ(station.post("/api/control", json{{"name", "Ann"}}).status, 200);
+  const auto is_error = [](const Answer& a, int status) {
+    EXPECT_EQ(a.status, status) << a.text;
+    EXPECT_TRUE(a.body.is_object() && a.body["error"].is_string() &&
+                !a.body["error"].get<std::string>().empty())
+        << a.text;
+    return a.body.is_object() ? a.body.value("error", "") : "";
+  };
+  EXPECT_NE(
+      is_error(station.post("/api/capture", std::string("{\"name\": \"a\""), "tab-a"), 400).find("not JSON"),
+      std::string::npos);
+  EXPECT_NE(is_error(station.post("/api/capture", json{{"name", "a"}, {"speed", 1}}), 400).find("speed"),
+            std::string::npos);
+  EXPECT_NE(is_error(station.post("/api/capture", json{{"name", 5}}), 400).find("capture.name"),
+            std::string::npos);
+  is_error(station.post("/api/capture", std::string(8192, ' '), "tab-a"), 413);
+  is_error(station.post("/api/solve", json{{"stack", "none"}}), 404);
+  is_error(station.post("/api/solve", json{{"stack", "none"}, {"method", "magic"}}), 400);
+  is_error(station.post("/api/place", json{{"object", "teapot"}}), 400);
+  is_error(station.post("/api/job/stop", json::object()), 409);
+  is_error(station.get("/api/unknown"), 404);
+  is_error(station.post("/api/unknown", json::object()), 404);
+  is_error(station.post("/api/preview", json{{"led", 5000}, {"exposure_us", 1000}}), 400);
+  // And the server still answers.
+  EXPECT_EQ(station.get("/api/status").status, 200);
+}
+
+TEST(StationApi, ThePreviewGivesThePictureAndItsFigures) {
+  StationUnderTest station;
+  ASSERT_EQ(station.post("/api/control", json{{"name", "Ann"}}).status, 200);
+  EXPECT_EQ(station.get("/api/preview.png").status, 404);
+  const Answer dim = station.post("/api/preview", json{{"led", 1}, {"exposure_us", 500}});
+  ASSERT_EQ(dim.status, 200) << dim.text;
+  const Answer bright = station.post("/api/preview", json{{"led", 1}, {"exposure_us", 200000}});
+  ASSERT_EQ(bright.status, 200) << bright.text;
+  EXPECT_EQ(bright.body["width"], 64);
+  EXPECT_EQ(bright.body["histogram"].size(), 64u);
+  EXPECT_GT(bright.body["mean"].get<double>(), dim.body["mean"].get<double>());
+  EXPECT_GT(bright.body["clipped"].get<double>(), dim.body["clipped"].get<double>());
+  const Answer png = station.get("/api/preview.png");
+  ASSERT_EQ(png.status, 200);
+  EXPECT_EQ(png.text.substr(1, 3), "PNG");
+  EXPECT_TRUE(station.get("/api/status").body["dome"]["controller"]["leds_on"].empty());
+}
+
+TEST(StationApi, LedsLitByHandGoDarkWhenTheirOperatorGoesAway) {
+  ServerOptions options;
+  options.lease = milliseconds(800);
+  StationUnderTest station(options);
+  ASSERT_EQ(station.post("/api/control", json{{"name", "Ann"}}).status, 200);
+  ASSERT_EQ(station.post("/api/leds", json{{"leds", {{{"id", 3}}}}}).status, 200);
+  EXPECT_EQ(station.get("/api/status", "tab-b").body["dome"]["controller"]["leds_on"], json::array({3}));
+  // The operator's tab closes: no more requests from it. The LED's own on-time
+  // limit (2 s on this rig) must not be what darkens it: the lease is shorter.
+  const auto closed = std::chrono::steady_clock::now();
+  json status;
+  do {
+    std::this_thread::sleep_for(milliseconds(100));
+    status = station.get("/api/status", "tab-b").body;
+  } while (!status["dome"]["controller"]["leds_on"].empty() &&
+           std::chrono::steady_clock::now() - closed < seconds(5));
+  const double dark_after = std::chrono::duration<double>(std::chrono::steady_clock::now() - closed).count();
+  EXPECT_TRUE(status["dome"]["controller"]["leds_on"].empty());
+  EXPECT_LT(dark_after, 1.6) << "dark only after " << dark_after << " s";
+  EXPECT_EQ(status["dome"]["controller"]["last_fault"], "")
+      << "the firmware's limit darkened it, not the station";
+  const auto lines = audit_lines(station.station().data());
+  EXPECT_TRUE(std::any_of(lines.begin(), lines.end(), [](const json& l) {
+    return l["action"] == "dark" && l["details"]["why"] == "the operator's lease lapsed";
+  }));
+  EXPECT_EQ(station.get("/api/access", "tab-a").body["you"], "viewer");
+}
+
+}  // namespace
+}  // namespace lightstage::station
