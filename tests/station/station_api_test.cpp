@@ -6,6 +6,7 @@
 #include "lightstage/testing/paths.hpp"
 
 #include <httplib.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include <gtest/gtest.h>
 
@@ -338,6 +339,77 @@ TEST(StationApi, LedsLitByHandGoDarkWhenTheirOperatorGoesAway) {
     return l["action"] == "dark" && l["details"]["why"] == "the operator's lease lapsed";
   }));
   EXPECT_EQ(station.get("/api/access", "tab-a").body["you"], "viewer");
+}
+
+TEST(StationApi, AnAbortedCaptureKeepsItsFramesButIsNotOfferedForResume) {
+  StationUnderTest station;
+  ASSERT_EQ(station.post("/api/control", json{{"name", "Ann"}}).status, 200);
+  ASSERT_EQ(station.post("/api/capture", kCapture).status, 200);
+  json job;
+  const auto deadline = std::chrono::steady_clock::now() + seconds(60);
+  do {
+    job = station.get("/api/job").body;
+    std::this_thread::sleep_for(milliseconds(5));
+  } while (job["state"] == "running" && job["done"].get<int>() < 10 &&
+           std::chrono::steady_clock::now() < deadline);
+  ASSERT_EQ(station.post("/api/job/abort", json::object()).status, 200);
+  job = station.wait_job();
+  ASSERT_EQ(job["state"], "stopped") << job.dump();
+  EXPECT_NE(job["error"].get<std::string>().find("aborted"), std::string::npos) << job.dump();
+  const json stack = station.get("/api/data").body["stacks"][0];
+  EXPECT_GE(stack["frames"].get<int>(), 10);
+  EXPECT_FALSE(stack["resumable"].get<bool>());
+  EXPECT_EQ(station.post("/api/capture/resume", json{{"name", "sphere"}}).status, 404);
+}
+
+// The chrome sphere's outline: detected on the stack, drawn by the operator
+// (as the stack's mask.png, which the calibration reads), forgotten again.
+TEST(StationApi, TheSpheresOutlineIsFoundDrawnAndForgotten) {
+  StationUnderTest station;
+  ASSERT_EQ(station.post("/api/control", json{{"name", "Ann"}}).status, 200);
+  ASSERT_EQ(station.post("/api/place", json{{"object", "chrome-1"}}).status, 200);
+  ASSERT_EQ(
+      station.post("/api/capture", json{{"name", "c1"}, {"target", "chrome-sphere"}, {"dark_frames", 0}})
+          .status,
+      200);
+  ASSERT_EQ(station.wait_job()["state"], "done");
+  const Answer found = station.get("/api/stacks/c1/sphere");
+  ASSERT_EQ(found.status, 200) << found.text;
+  ASSERT_TRUE(found.body["circle"].is_object()) << found.text;
+  EXPECT_EQ(found.body["circle"]["source"], "image");
+  EXPECT_FALSE(found.body["drawn"].get<bool>());
+  EXPECT_EQ(station.get("/api/stacks/c1/sphere.png").text.substr(1, 3), "PNG");
+
+  const double x = found.body["circle"]["x_px"], y = found.body["circle"]["y_px"];
+  const double r = found.body["circle"]["radius_px"];
+  const Answer drawn =
+      station.post("/api/stacks/c1/sphere", json{{"x_px", x + 3}, {"y_px", y}, {"radius_px", r}});
+  ASSERT_EQ(drawn.status, 200) << drawn.text;
+  EXPECT_TRUE(drawn.body["drawn"].get<bool>());
+  EXPECT_EQ(drawn.body["circle"]["source"], "mask");
+  EXPECT_NEAR(drawn.body["circle"]["x_px"].get<double>(), x + 3, 0.3);
+  EXPECT_NEAR(drawn.body["circle"]["radius_px"].get<double>(), r, 0.5);
+  EXPECT_TRUE(fs::exists(station.station().data() / "stacks" / "c1" / "mask.png"));
+  EXPECT_EQ(station.post("/api/stacks/c1/sphere", json{{"x_px", 500}, {"y_px", y}, {"radius_px", r}}).status,
+            400);
+
+  const Answer forgotten = station.post("/api/stacks/c1/sphere/forget", json::object());
+  ASSERT_EQ(forgotten.status, 200) << forgotten.text;
+  EXPECT_FALSE(forgotten.body["drawn"].get<bool>());
+  EXPECT_NEAR(forgotten.body["circle"]["x_px"].get<double>(), x, 1e-9);
+  EXPECT_FALSE(fs::exists(station.station().data() / "stacks" / "c1" / "mask.png"));
+  EXPECT_EQ(station.post("/api/stacks/c1/sphere/forget", json::object()).status, 409);
+  EXPECT_EQ(station.get("/api/stacks/nothing/sphere").status, 404);
+  EXPECT_EQ(station.get("/api/stacks/..%2F..%2Fetc/sphere").status, 404);
+
+  // A mask the station did not draw is left alone.
+  const fs::path mask = station.station().data() / "stacks" / "c1" / "mask.png";
+  ASSERT_TRUE(cv::imwrite(mask.string(), cv::Mat(64, 64, CV_8UC1, cv::Scalar(255))));
+  const Answer over = station.post("/api/stacks/c1/sphere", json{{"x_px", x}, {"y_px", y}, {"radius_px", r}});
+  EXPECT_EQ(over.status, 409) << over.text;
+  EXPECT_EQ(cv::countNonZero(cv::imread(mask.string(), cv::IMREAD_GRAYSCALE)), 64 * 64);
+  EXPECT_EQ(station.post("/api/stacks/c1/sphere/forget", json::object()).status, 409);
+  EXPECT_TRUE(fs::exists(mask));
 }
 
 }  // namespace

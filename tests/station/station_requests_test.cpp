@@ -65,20 +65,21 @@ TEST(StationRequests, LedsPreviewCalibrationAndSolveRequestsAreChecked) {
   EXPECT_TRUE(names(refused(preview_request, {{"led", 1}, {"exposure_us", 0}}), "preview.exposure_us"));
   EXPECT_EQ(refused(preview_request, {{"led", 1}, {"exposure_us", 1000}, {"gain", 2}}), "");
 
-  const CalibrationRequest calibration =
-      calibration_request({{"name", "cal"},
-                           {"stacks", {"c1", "c2"}},
-                           {"circle", {{"x_px", 60}, {"y_px", 62.5}, {"radius_px", 30}}}});
+  const CalibrationRequest calibration = calibration_request({{"name", "cal"}, {"stacks", {"c1", "c2"}}});
   EXPECT_EQ(calibration.stacks.size(), 2u);
-  ASSERT_TRUE(calibration.circle);
-  EXPECT_EQ(calibration.circle->y_px, 62.5);
   EXPECT_TRUE(names(refused(calibration_request, {{"name", "cal"}, {"stacks", json::array()}}),
                     "calibration.stacks"));
   EXPECT_TRUE(
-      names(refused(calibration_request, {{"name", "cal"}, {"stacks", {"c1"}}, {"circle", {{"x_px", 1}}}}),
-            "calibration.circle"));
-  EXPECT_TRUE(
       names(refused(calibration_request, {{"name", "cal"}, {"stacks", {"a/b"}}}), "calibration.stacks[]"));
+  EXPECT_TRUE(names(refused(calibration_request, {{"name", "cal"}, {"stacks", {"c1"}}, {"circle", 1}}),
+                    "unknown field 'circle'"));
+
+  const SphereCircle circle = sphere_request({{"x_px", 60}, {"y_px", 62.5}, {"radius_px", 30}});
+  EXPECT_EQ(circle.y_px, 62.5);
+  EXPECT_TRUE(names(refused(sphere_request, {{"x_px", 1}}), "radius_px"));
+  EXPECT_TRUE(
+      names(refused(sphere_request, {{"x_px", 1}, {"y_px", 1}, {"radius_px", 0.5}}), "sphere.radius_px"));
+  EXPECT_TRUE(names(refused(sphere_request, {{"x_px", -1}, {"y_px", 1}, {"radius_px", 5}}), "sphere.x_px"));
 
   const SolveRequest solve = solve_request({{"stack", "coin"}, {"method", "robust"}});
   EXPECT_EQ(solve.name, "coin-robust");

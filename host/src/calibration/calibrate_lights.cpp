@@ -22,29 +22,6 @@ struct StackSpheres {
   std::vector<std::size_t> spheres;  // indices into LightCalibration::spheres
 };
 
-std::vector<ImageCircle> find_circles(const CalibrationImages& images,
-                                      const LightCalibrationOptions& options) {
-  SphereDetectionOptions detection = options.detection;
-  detection.expected = options.spheres_per_stack;
-  std::vector<ImageCircle> circles;
-  if (!options.given_circles.empty()) {
-    circles = options.given_circles;
-    for (auto& c : circles) c.source = "given";
-  } else if (!images.mask.empty()) {
-    circles = circles_from_mask(images.mask, detection, (images.folder / "mask.png").string());
-  } else {
-    circles =
-        detect_circles(median_image(images.grey), detection,
-                       fmt::format("{} (median of its {} images)", images.folder.string(), images.size()));
-  }
-  // Left to right, then top to bottom: the same order in every stack.
-  std::sort(circles.begin(), circles.end(), [](const ImageCircle& a, const ImageCircle& b) {
-    return std::abs(a.centre_px.x() - b.centre_px.x()) > 1 ? a.centre_px.x() < b.centre_px.x()
-                                                           : a.centre_px.y() < b.centre_px.y();
-  });
-  return circles;
-}
-
 CameraGeometry choose_camera(const LightCalibrationOptions& options, const CalibrationImages& images,
                              const std::optional<Rig>& rig) {
   if (options.camera) return *options.camera;
@@ -100,6 +77,29 @@ void report_position_accuracy(const LightCalibration& cal) {
 }
 
 }  // namespace
+
+std::vector<ImageCircle> find_sphere_circles(const CalibrationImages& images,
+                                             const LightCalibrationOptions& options) {
+  SphereDetectionOptions detection = options.detection;
+  detection.expected = options.spheres_per_stack;
+  std::vector<ImageCircle> circles;
+  if (!options.given_circles.empty()) {
+    circles = options.given_circles;
+    for (auto& c : circles) c.source = "given";
+  } else if (!images.mask.empty()) {
+    circles = circles_from_mask(images.mask, detection, (images.folder / "mask.png").string());
+  } else {
+    circles =
+        detect_circles(median_image(images.grey), detection,
+                       fmt::format("{} (median of its {} images)", images.folder.string(), images.size()));
+  }
+  // Left to right, then top to bottom: the same order in every stack.
+  std::sort(circles.begin(), circles.end(), [](const ImageCircle& a, const ImageCircle& b) {
+    return std::abs(a.centre_px.x() - b.centre_px.x()) > 1 ? a.centre_px.x() < b.centre_px.x()
+                                                           : a.centre_px.y() < b.centre_px.y();
+  });
+  return circles;
+}
 
 void LightCalibrationOptions::check() const {
   if (inputs.empty()) fail("calibrate lights: at least one chrome-sphere stack (--input) is needed");
@@ -172,7 +172,7 @@ LightCalibrationRun calibrate_lights(const LightCalibrationOptions& options) {
     const double z = options.sphere_z_mm.empty()       ? cal.object_position_mm.z()
                      : options.sphere_z_mm.size() == 1 ? options.sphere_z_mm.front()
                                                        : options.sphere_z_mm[s];
-    for (const auto& circle : find_circles(images, options)) {
+    for (const auto& circle : find_sphere_circles(images, options)) {
       stack.spheres.push_back(cal.spheres.size());
       cal.spheres.push_back({images.folder, locate_sphere(circle, cal.camera, z, options.sphere_radius_mm)});
       logger("host")->info(

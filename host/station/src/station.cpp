@@ -3,19 +3,24 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
 #include "lightstage/host/calibration/calibrate_lights.hpp"
+#include "lightstage/host/calibration/calibration_images.hpp"
 #include "lightstage/host/calibration/calibration_output.hpp"
 #include "lightstage/host/capture/capture_session.hpp"
 #include "lightstage/host/controller/sequences.hpp"
+#include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/report/report.hpp"
 #include "lightstage/pipeline/integrate_folder.hpp"
+#include "lightstage/pipeline/rti_exchange.hpp"
 #include "lightstage/pipeline/solve_folder.hpp"
 #include "lightstage/pipeline/solve_methods.hpp"
 #include "lightstage/station/operator_access.hpp"
 #include "lightstage/station/preview_figures.hpp"
 
 #include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 
 namespace lightstage::station {
@@ -54,7 +59,7 @@ nlohmann::json controller_json(const proto::Info& info, const proto::Status& sta
 }  // namespace
 
 Station::Station(StationOptions options) : options_(std::move(options)), rig_(load_rig(options_.rig)) {
-  for (const char* kind : {"stacks", "calibrations", "results", "surfaces", ".station"})
+  for (const char* kind : {"stacks", "calibrations", "results", "surfaces", "exports", ".station"})
     fs::create_directories(options_.data / kind);
   if (options_.simulated) {
     SimulatedBenchOptions bench = *options_.simulated;
@@ -211,9 +216,15 @@ nlohmann::json Station::data_json() const {
       if (fs::exists(folder("surfaces", name) / file))
         files.push_back(std::string("surfaces/") + name + "/" + file);
     }
+    nlohmann::json exports = nlohmann::json::object();
+    for (const auto& [format, extension] : {std::pair{"ptm", ".ptm"}, std::pair{"hsh", ".rti"}}) {
+      if (fs::exists(options_.data / "exports" / (name + extension)))
+        exports[format] = "exports/" + name + extension;
+    }
     results.push_back({{"name", name},
                        {"method", summary.is_object() ? summary.value("method", "") : ""},
-                       {"files", files}});
+                       {"files", files},
+                       {"exports", exports}});
   }
   return {{"stacks", stacks}, {"calibrations", calibrations}, {"results", results}};
 }
@@ -303,13 +314,15 @@ nlohmann::json Station::start_job(const std::string& kind, nlohmann::json reques
   if (job_ && job_->running())
     throw Refused(409, fmt::format("a {} is running: stop it or wait for it to end", job_->kind()));
   job_.reset();  // the last one ended: its thread is joined
+  abort_ = false;
   job_ = std::make_unique<StationJob>(next_job_id_++, kind, std::move(request), std::move(work));
   return job_->to_json();
 }
 
-void Station::stop_job() {
+void Station::stop_job(bool abort) {
   const std::lock_guard lock(job_mutex_);
   if (!job_ || !job_->running()) throw Refused(409, "no job is running");
+  abort_ = abort;
   job_->request_stop();
 }
 
@@ -325,6 +338,78 @@ void Station::wait_job() {
     job = job_.get();
   }
   if (job) job->wait();
+}
+
+fs::path Station::existing_stack(const std::string& name) const {
+  check_folder_name(name, "stack");
+  const fs::path stack = folder("stacks", name);
+  if (!fs::exists(stack / "filenames.txt")) throw Refused(404, fmt::format("no stack '{}'", name));
+  return stack;
+}
+
+nlohmann::json Station::sphere(const std::string& name) const {
+  const calibration::CalibrationImages images = calibration::load_calibration_images(existing_stack(name));
+  nlohmann::json j = {{"stack", name},
+                      {"width", images.width()},
+                      {"height", images.height()},
+                      {"circle", nullptr},
+                      {"error", ""}};
+  j["drawn"] = fs::exists(options_.data / ".station" / "spheres" / (name + ".json"));
+  try {
+    const auto circles = calibration::find_sphere_circles(images, calibration::LightCalibrationOptions{});
+    const calibration::ImageCircle& c = circles.front();
+    j["circle"] = {{"x_px", c.centre_px.x()},
+                   {"y_px", c.centre_px.y()},
+                   {"radius_px", c.radius_px},
+                   {"source", c.source},
+                   {"rms_px", c.rms_px}};
+  } catch (const InputError& e) {
+    j["error"] = e.what();  // not found: the operator draws it
+  }
+  return j;
+}
+
+std::string Station::sphere_png(const std::string& name) const {
+  const calibration::CalibrationImages images = calibration::load_calibration_images(existing_stack(name));
+  cv::Mat brightest = calibration::max_image(images.grey);
+  // A square root lifts the dim rim of a chrome sphere in a dark dome out of the black.
+  cv::Mat lifted;
+  cv::sqrt(cv::max(brightest, 0.0), lifted);
+  return encode_preview_png(cv::min(lifted, 1.0));
+}
+
+nlohmann::json Station::set_sphere(const std::string& name, const SphereCircle& circle) {
+  const fs::path stack = existing_stack(name);
+  const fs::path marker = options_.data / ".station" / "spheres" / (name + ".json");
+  if (fs::exists(stack / "mask.png") && !fs::exists(marker))
+    throw Refused(409, fmt::format("stacks/{}/mask.png was not drawn here: it is left as it is", name));
+  const nlohmann::json manifest = read_json_or_null(stack / "manifest.json");
+  const int width = manifest.is_object() ? manifest.value("width", 0) : 0;
+  const int height = manifest.is_object() ? manifest.value("height", 0) : 0;
+  if (width <= 0 || height <= 0)
+    throw Refused(400, fmt::format("stacks/{}: its manifest gives no image size", name));
+  if (circle.x_px > width || circle.y_px > height)
+    throw Refused(400, fmt::format("sphere: the centre ({}, {}) is outside the {}x{} image", circle.x_px,
+                                   circle.y_px, width, height));
+  // A disk, drawn with 8 bits of sub-pixel precision; pixel centres at +0.5.
+  cv::Mat mask(height, width, CV_8UC1, cv::Scalar(0));
+  constexpr int kShift = 8;
+  const auto fixed = [](double v) { return static_cast<int>(std::lround(v * (1 << kShift))); };
+  cv::circle(mask, cv::Point(fixed(circle.x_px - 0.5), fixed(circle.y_px - 0.5)), fixed(circle.radius_px),
+             cv::Scalar(255), cv::FILLED, cv::LINE_8, kShift);
+  write_json_atomically(marker,
+                        {{"x_px", circle.x_px}, {"y_px", circle.y_px}, {"radius_px", circle.radius_px}});
+  io::write_png(stack / "mask.png", mask);
+  return sphere(name);
+}
+
+nlohmann::json Station::forget_sphere(const std::string& name) {
+  const fs::path stack = existing_stack(name);
+  const fs::path marker = options_.data / ".station" / "spheres" / (name + ".json");
+  if (!fs::exists(marker)) throw Refused(409, fmt::format("stacks/{}: no outline was drawn here", name));
+  fs::remove(stack / "mask.png");
+  fs::remove(marker);
+  return sphere(name);
 }
 
 nlohmann::json Station::start_test_sequence() {
@@ -420,9 +505,13 @@ nlohmann::json Station::capture_work(StationJob& job, const CaptureRequest& requ
   } catch (const InputError&) {
     set_lit({}, false);
     throw;
-  } catch (const CaptureStopped&) {
+  } catch (const CaptureStopped& e) {
     set_lit({}, false);
-    throw;
+    if (!abort_) throw;
+    // Aborted: the frames stay on disk, the plan goes (the page offers no resume).
+    fs::remove(options_.data / ".station" / "captures" / (request.name + ".json"));
+    throw CaptureStopped(
+        fmt::format("the capture was aborted; the frames taken are kept in stacks/{}", request.name));
   } catch (const std::exception& e) {
     drop_dome(e.what());
     throw;
@@ -447,13 +536,6 @@ nlohmann::json Station::calibration_work(StationJob& job, const CalibrationReque
   // Two positions or more: LED positions triangulated, no help from the nominal dome.
   if (options.inputs.size() >= 2) options.dome_radius_mm = 0;
   options.sphere_z_mm = {rig_.object_position_mm.z()};
-  if (request.circle) {
-    calibration::ImageCircle circle;
-    circle.centre_px = Vec2(request.circle->x_px, request.circle->y_px);
-    circle.radius_px = request.circle->radius_px;
-    circle.source = "given";
-    options.given_circles = {circle};
-  }
   options.allow_missing = request.allow_missing;
   job.say("finding the highlights");
   const auto run = calibration::calibrate_lights(options);
@@ -482,6 +564,27 @@ nlohmann::json Station::start_solve(const SolveRequest& request) {
   }
   return start_job("solve", request.to_json(),
                    [this, request](StationJob& job) { return solve_work(job, request); });
+}
+
+nlohmann::json Station::start_export(const std::string& result, const std::string& format) {
+  check_folder_name(result, "export.result");
+  if (format != "ptm" && format != "hsh")
+    throw Refused(400, fmt::format("export.format: '{}' is neither ptm nor hsh", format));
+  if (!fs::exists(folder("results", result) / "summary.json"))
+    throw Refused(404, fmt::format("export.result: no result '{}'", result));
+  const fs::path out = options_.data / "exports" / (result + (format == "ptm" ? ".ptm" : ".rti"));
+  if (fs::exists(out)) throw Refused(409, fmt::format("exports/{} exists", out.filename().string()));
+  return start_job(
+      "export", {{"result", result}, {"format", format}}, [this, result, format, out](StationJob& job) {
+        pipeline::ExportSettings settings;
+        settings.input = folder("results", result);
+        settings.out = out;
+        settings.format = format;
+        job.say(fmt::format("fitting the {} of every pixel", format == "ptm" ? "polynomial" : "harmonics"));
+        nlohmann::json written = pipeline::export_rti(settings);
+        written["file"] = "exports/" + out.filename().string();
+        return written;
+      });
 }
 
 nlohmann::json Station::solve_work(StationJob& job, const SolveRequest& request) {

@@ -117,7 +117,7 @@ CaptureRequest capture_request(const nlohmann::json& body) {
 }
 
 CalibrationRequest calibration_request(const nlohmann::json& body) {
-  only_fields(body, {"name", "stacks", "circle", "allow_missing"}, "calibration");
+  only_fields(body, {"name", "stacks", "allow_missing"}, "calibration");
   if (!body.contains("name") || !body.contains("stacks"))
     bad("calibration: the fields 'name' and 'stacks' (the chrome-sphere captures) are needed");
   CalibrationRequest request;
@@ -128,20 +128,19 @@ CalibrationRequest calibration_request(const nlohmann::json& body) {
     check_folder_name(request.stacks.back(), "calibration.stacks[]");
   }
   if (request.stacks.empty()) bad("calibration.stacks: at least one chrome-sphere capture is needed");
-  if (body.contains("circle")) {
-    const nlohmann::json& c = body["circle"];
-    only_fields(c, {"x_px", "y_px", "radius_px"}, "calibration.circle");
-    if (!c.contains("x_px") || !c.contains("y_px") || !c.contains("radius_px"))
-      bad("calibration.circle: x_px, y_px and radius_px are needed");
-    request.circle = SphereCircle{number(c["x_px"], "calibration.circle.x_px", -1e6, 1e6),
-                                  number(c["y_px"], "calibration.circle.y_px", -1e6, 1e6),
-                                  number(c["radius_px"], "calibration.circle.radius_px", 1, 1e6)};
-  }
   if (body.contains("allow_missing")) {
     if (!body["allow_missing"].is_boolean()) bad("calibration.allow_missing: must be true or false");
     request.allow_missing = body["allow_missing"].get<bool>();
   }
   return request;
+}
+
+SphereCircle sphere_request(const nlohmann::json& body) {
+  only_fields(body, {"x_px", "y_px", "radius_px"}, "sphere");
+  if (!body.contains("x_px") || !body.contains("y_px") || !body.contains("radius_px"))
+    bad("sphere: x_px, y_px and radius_px are needed");
+  return {number(body["x_px"], "sphere.x_px", 0, 1e6), number(body["y_px"], "sphere.y_px", 0, 1e6),
+          number(body["radius_px"], "sphere.radius_px", 2, 1e6)};
 }
 
 SolveRequest solve_request(const nlohmann::json& body) {
@@ -172,10 +171,7 @@ nlohmann::json CaptureRequest::to_json() const {
 }
 
 nlohmann::json CalibrationRequest::to_json() const {
-  nlohmann::json j = {{"name", name}, {"stacks", stacks}, {"allow_missing", allow_missing}};
-  if (circle)
-    j["circle"] = {{"x_px", circle->x_px}, {"y_px", circle->y_px}, {"radius_px", circle->radius_px}};
-  return j;
+  return {{"name", name}, {"stacks", stacks}, {"allow_missing", allow_missing}};
 }
 
 nlohmann::json SolveRequest::to_json() const {

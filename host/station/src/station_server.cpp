@@ -141,15 +141,22 @@ void StationServer::check_token(const httplib::Request& request) const {
   access_.check_token(presented);
 }
 
+void StationServer::guarded(const httplib::Request& request, httplib::Response& response,
+                            const std::function<void()>& answer) {
+  try {
+    check_token(request);
+    access_.touch(client_of(request), Clock::now());
+    answer();
+  } catch (const Refused& e) {
+    answer_error(response, e.status(), e.what());
+  } catch (const InputError& e) {
+    answer_error(response, 400, e.what());
+  }
+}
+
 void StationServer::read(const std::string& pattern, std::function<nlohmann::json()> answer) {
   server_->Get(pattern, [this, answer](const httplib::Request& request, httplib::Response& response) {
-    try {
-      check_token(request);
-      access_.touch(client_of(request), Clock::now());
-      answer_json(response, 200, answer());
-    } catch (const Refused& e) {
-      answer_error(response, e.status(), e.what());
-    }
+    guarded(request, response, [&] { answer_json(response, 200, answer()); });
   });
 }
 
@@ -163,8 +170,10 @@ void StationServer::action(const std::string& pattern, const std::string& name, 
       check_token(request);
       const nlohmann::json body = parse_body(request);
       entry.details = body;
+      const std::string target = request.matches.size() > 1 ? request.matches[1].str() : std::string();
+      if (!target.empty()) entry.details = {{"target", target}, {"body", body}};
       if (needs_control) access_.require_operator(client, Clock::now());
-      answer_json(response, 200, act(body, client));
+      answer_json(response, 200, act({body, client, target}));
     } catch (const Refused& e) {
       entry.outcome = fmt::format("refused: {}", e.what());
       answer_error(response, e.status(), e.what());
@@ -175,7 +184,6 @@ void StationServer::action(const std::string& pattern, const std::string& name, 
       entry.outcome = fmt::format("failed: {}", e.what());
       answer_error(response, 500, e.what());
     }
-    if (entry.details.is_object() && entry.details.contains("token")) entry.details.erase("token");
     entry.name = access_.name_of(client);
     audit_.record(entry);
   });
@@ -202,92 +210,106 @@ void StationServer::routes() {
     answer_error(response, response.status, message);
   });
 
+  page_routes();
   read("/api/status", [this] { return station_.status(); });
   server_->Get("/api/access", [this](const httplib::Request& request, httplib::Response& response) {
-    try {
-      check_token(request);
-      answer_json(response, 200, access_.to_json(client_of(request), Clock::now()));
-    } catch (const Refused& e) {
-      answer_error(response, e.status(), e.what());
-    }
+    guarded(request, response,
+            [&] { answer_json(response, 200, access_.to_json(client_of(request), Clock::now())); });
   });
   read("/api/rig", [this] { return station_.rig_json(); });
   read("/api/data", [this] { return station_.data_json(); });
   read("/api/methods", [this] { return nlohmann::json(station_.methods()); });
   read("/api/job", [this] { return station_.job_json(); });
 
-  action("/api/control", "control.take", false,
-         [this](const nlohmann::json& body, const std::string& client) {
-           std::string name = body.is_object() && body.contains("name") && body["name"].is_string()
-                                  ? body["name"].get<std::string>()
-                                  : std::string();
-           if (name.size() > 64) name.resize(64);
-           access_.take(client, name, Clock::now());
-           return access_.to_json(client, Clock::now());
-         });
-  action("/api/control/release", "control.release", false,
-         [this](const nlohmann::json&, const std::string& client) {
-           access_.release(client);
-           if (station_.lit_by_hand()) station_.dark();  // what this operator lit goes dark with them
-           return access_.to_json(client, Clock::now());
-         });
-  action("/api/leds", "leds.set", true, [this](const nlohmann::json& body, const std::string&) {
-    station_.set_leds(leds_request(body));
+  action("/api/control", "control.take", false, [this](const Call& call) {
+    std::string name = call.body.is_object() && call.body.contains("name") && call.body["name"].is_string()
+                           ? call.body["name"].get<std::string>()
+                           : std::string();
+    if (name.size() > 64) name.resize(64);
+    access_.take(call.client, name, Clock::now());
+    return access_.to_json(call.client, Clock::now());
+  });
+  action("/api/control/release", "control.release", false, [this](const Call& call) {
+    access_.release(call.client);
+    if (station_.lit_by_hand()) station_.dark();  // what this operator lit goes dark with them
+    return access_.to_json(call.client, Clock::now());
+  });
+  action("/api/leds", "leds.set", true, [this](const Call& call) {
+    station_.set_leds(leds_request(call.body));
     return station_.status()["dome"];
   });
-  action("/api/dark", "dark", false, [this](const nlohmann::json&, const std::string&) {
+  action("/api/dark", "dark", false, [this](const Call&) {
     station_.dark();
     return station_.status()["dome"];
   });
-  action("/api/place", "place", true, [this](const nlohmann::json& body, const std::string&) {
-    if (!body.contains("object") || !body["object"].is_string())
+  action("/api/place", "place", true, [this](const Call& call) {
+    if (!call.body.contains("object") || !call.body["object"].is_string())
       throw Refused(400, "place: the field 'object' is needed (\"object\", \"chrome-1\", ...)");
-    station_.place(body["object"].get<std::string>());
+    station_.place(call.body["object"].get<std::string>());
     return station_.status();
   });
-  action("/api/preview", "preview", true, [this](const nlohmann::json& body, const std::string&) {
-    Preview preview = station_.preview(preview_request(body));
+  action("/api/preview", "preview", true, [this](const Call& call) {
+    Preview preview = station_.preview(preview_request(call.body));
     const std::lock_guard lock(preview_mutex_);
     preview_png_ = std::move(preview.png);
     return preview.stats;
   });
   server_->Get("/api/preview.png", [this](const httplib::Request& request, httplib::Response& response) {
-    try {
-      check_token(request);
+    guarded(request, response, [&] {
       const std::lock_guard lock(preview_mutex_);
       if (preview_png_.empty()) throw Refused(404, "no preview taken yet");
       response.set_header("Cache-Control", "no-store");
       response.set_content(preview_png_, "image/png");
-    } catch (const Refused& e) {
-      answer_error(response, e.status(), e.what());
-    }
+    });
   });
   action("/api/test-sequence", "test-sequence", true,
-         [this](const nlohmann::json&, const std::string&) { return station_.start_test_sequence(); });
-  action("/api/capture", "capture.start", true, [this](const nlohmann::json& body, const std::string&) {
-    return station_.start_capture(capture_request(body));
+         [this](const Call&) { return station_.start_test_sequence(); });
+  action("/api/capture", "capture.start", true,
+         [this](const Call& call) { return station_.start_capture(capture_request(call.body)); });
+  action("/api/capture/resume", "capture.resume", true, [this](const Call& call) {
+    if (!call.body.contains("name") || !call.body["name"].is_string())
+      throw Refused(400, "resume: the field 'name' (the stack to complete) is needed");
+    return station_.resume_capture(call.body["name"].get<std::string>());
   });
-  action("/api/capture/resume", "capture.resume", true,
-         [this](const nlohmann::json& body, const std::string&) {
-           if (!body.contains("name") || !body["name"].is_string())
-             throw Refused(400, "resume: the field 'name' (the stack to complete) is needed");
-           return station_.resume_capture(body["name"].get<std::string>());
-         });
-  action("/api/calibrate", "calibration.start", true, [this](const nlohmann::json& body, const std::string&) {
-    return station_.start_calibration(calibration_request(body));
+  server_->Get(R"(/api/stacks/([^/]+)/sphere)",
+               [this](const httplib::Request& request, httplib::Response& response) {
+                 guarded(request, response,
+                         [&] { answer_json(response, 200, station_.sphere(request.matches[1].str())); });
+               });
+  server_->Get(R"(/api/stacks/([^/]+)/sphere\.png)",
+               [this](const httplib::Request& request, httplib::Response& response) {
+                 guarded(request, response, [&] {
+                   response.set_header("Cache-Control", "no-store");
+                   response.set_content(station_.sphere_png(request.matches[1].str()), "image/png");
+                 });
+               });
+  action(R"(/api/stacks/([^/]+)/sphere)", "sphere.draw", true,
+         [this](const Call& call) { return station_.set_sphere(call.target, sphere_request(call.body)); });
+  action(R"(/api/stacks/([^/]+)/sphere/forget)", "sphere.forget", true,
+         [this](const Call& call) { return station_.forget_sphere(call.target); });
+  action("/api/calibrate", "calibration.start", true,
+         [this](const Call& call) { return station_.start_calibration(calibration_request(call.body)); });
+  action("/api/solve", "solve.start", true,
+         [this](const Call& call) { return station_.start_solve(solve_request(call.body)); });
+  action("/api/export", "export.start", true, [this](const Call& call) {
+    const nlohmann::json& body = call.body;
+    if (!body.is_object() || !body.contains("result") || !body["result"].is_string() ||
+        !body.contains("format") || !body["format"].is_string())
+      throw Refused(400, "export: the fields 'result' and 'format' (ptm or hsh) are needed");
+    return station_.start_export(body["result"].get<std::string>(), body["format"].get<std::string>());
   });
-  action("/api/solve", "solve.start", true, [this](const nlohmann::json& body, const std::string&) {
-    return station_.start_solve(solve_request(body));
-  });
-  action("/api/job/stop", "job.stop", true, [this](const nlohmann::json&, const std::string&) {
+  action("/api/job/stop", "job.stop", true, [this](const Call&) {
     station_.stop_job();
     return station_.job_json();
   });
+  action("/api/job/abort", "job.abort", true, [this](const Call&) {
+    station_.stop_job(true);
+    return station_.job_json();
+  });
 
-  server_->Get(R"(/files/((stacks|calibrations|results|surfaces)/.+))",
+  server_->Get(R"(/files/((stacks|calibrations|results|surfaces|exports)/.+))",
                [this](const httplib::Request& request, httplib::Response& response) {
-                 try {
-                   check_token(request);
+                 guarded(request, response, [&] {
                    const auto file = contained_file(station_.data(), request.matches[1].str());
                    if (!file) throw Refused(404, fmt::format("no file {}", request.matches[1].str()));
                    const auto size = static_cast<std::size_t>(fs::file_size(*file));
@@ -301,9 +323,7 @@ void StationServer::routes() {
                          if (in->gcount() <= 0) return false;
                          return sink.write(chunk.data(), static_cast<std::size_t>(in->gcount()));
                        });
-                 } catch (const Refused& e) {
-                   answer_error(response, e.status(), e.what());
-                 }
+                 });
                });
 }
 

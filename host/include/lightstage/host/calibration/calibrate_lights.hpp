@@ -57,6 +57,12 @@ struct LightCalibrationRun {
   double seconds = 0;
 };
 
+// The spheres of one stack as the calibration finds them: the given circles,
+// else its mask.png's, else detected on the median of its images; left to
+// right. Throws InputError naming the stack when they cannot be found.
+std::vector<ImageCircle> find_sphere_circles(const CalibrationImages& images,
+                                             const LightCalibrationOptions& options);
+
 // Throws InputError naming the stack and images when a sphere cannot be
 // found, when images differ between stacks, or (unless allow_missing) when
 // a light has no usable highlight on any sphere — listing every such image and why.

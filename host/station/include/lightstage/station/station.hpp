@@ -4,9 +4,9 @@
 // them. The HTTP layer (station_server.hpp) only maps requests onto this.
 //
 // DATA holds stacks/NAME (captures), calibrations/NAME, results/NAME (solve
-// and report), surfaces/NAME (its depth and mesh), audit.log and .station/ (the capture requests a resume
-// repeats, the simulated dome's logs). Nothing already in a folder is
-// overwritten: a name in use is refused.
+// and report), surfaces/NAME (its depth and mesh), exports/ (RTI files), audit.log and .station/ (the capture
+// requests a resume repeats, the simulated dome's logs). Nothing already in a folder is overwritten: a name
+// in use is refused.
 //
 // The dome: one thread at a time talks to the controller. A job that needs
 // it (capture, test sequence) holds it until it ends; LEDs lit by hand are
@@ -19,6 +19,7 @@
 #include "lightstage/station/station_job.hpp"
 #include "lightstage/station/station_requests.hpp"
 
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -66,13 +67,28 @@ class Station {
   Preview preview(const PreviewRequest& request);
   void place(const std::string& what);  // simulated only: the object or a chrome sphere position
 
+  // A chrome-sphere stack's outline as the calibration would find it (its
+  // mask.png, else detected): {"circle": {x_px, y_px, radius_px} | null,
+  // "error", "width", "height"}; its picture (the maximum over its frames,
+  // brightened to show a dark sphere's rim) as PNG.
+  nlohmann::json sphere(const std::string& stack) const;
+  std::string sphere_png(const std::string& stack) const;
+  // The outline the operator drew, written as the stack's mask.png (a disk),
+  // which the calibration then uses; refused over a mask.png the station did not write.
+  nlohmann::json set_sphere(const std::string& stack, const SphereCircle& circle);
+  // Removes the outline drawn here (the calibration then detects the sphere again).
+  nlohmann::json forget_sphere(const std::string& stack);
+
   nlohmann::json start_test_sequence();
   nlohmann::json start_capture(const CaptureRequest& request);
   nlohmann::json resume_capture(const std::string& name);
   nlohmann::json start_calibration(const CalibrationRequest& request);
   nlohmann::json start_solve(const SolveRequest& request);
-  // Asks the running job to stop at its next safe point (a capture keeps its frames).
-  void stop_job();
+  // An RTI file of a result's stack, exports/RESULT.ptm (PTM) or .rti (HSH), for RTIViewer and the like.
+  nlohmann::json start_export(const std::string& result, const std::string& format);
+  // Asks the running job to stop at its next safe point (a capture keeps its
+  // frames). An abort also forgets a capture's plan: it is not resumed.
+  void stop_job(bool abort = false);
   nlohmann::json job_json() const;
   // Waits for the job to end (tests, shutdown).
   void wait_job();
@@ -90,6 +106,7 @@ class Station {
   nlohmann::json test_sequence_work(StationJob& job);
   void set_lit(std::vector<std::pair<std::uint32_t, float>> lit, bool by_hand);
   std::filesystem::path folder(const char* kind, const std::string& name) const;
+  std::filesystem::path existing_stack(const std::string& name) const;  // Refused(404) when there is none
 
   StationOptions options_;
   Rig rig_;
@@ -107,6 +124,7 @@ class Station {
   mutable std::mutex job_mutex_;
   int next_job_id_ = 1;
   std::unique_ptr<StationJob> job_;
+  std::atomic<bool> abort_{false};  // the running job was aborted, not paused
 };
 
 }  // namespace lightstage::station

@@ -39,14 +39,15 @@ struct CaptureRequest {
   nlohmann::json to_json() const;
 };
 
+// A chrome sphere's outline as the operator drew it on a stack's picture
+// (image pixels, pixel (c, r) centred at (c + 0.5, r + 0.5)).
 struct SphereCircle {
-  double x_px = 0, y_px = 0, radius_px = 0;  // the chrome sphere's outline as the operator drew it
+  double x_px = 0, y_px = 0, radius_px = 0;
 };
 
 struct CalibrationRequest {
   std::string name;                 // DATA/calibrations/NAME
   std::vector<std::string> stacks;  // chrome-sphere stacks, one per sphere position
-  std::optional<SphereCircle> circle;
   bool allow_missing = false;
   nlohmann::json to_json() const;
 };
@@ -64,6 +65,7 @@ LedsRequest leds_request(const nlohmann::json& body);
 PreviewRequest preview_request(const nlohmann::json& body);
 CaptureRequest capture_request(const nlohmann::json& body);
 CalibrationRequest calibration_request(const nlohmann::json& body);
+SphereCircle sphere_request(const nlohmann::json& body);
 SolveRequest solve_request(const nlohmann::json& body);
 
 }  // namespace lightstage::station

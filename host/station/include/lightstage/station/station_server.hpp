@@ -18,6 +18,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -57,10 +58,21 @@ class StationServer {
  private:
   void routes();
   void watch_leases();
+  void page_routes();  // the page and its script (station_page.cpp)
+  // What an action is given: the request's JSON body, the client, and the
+  // name the path names (a stack), if any.
+  struct Call {
+    const nlohmann::json& body;
+    const std::string& client;
+    std::string target;
+  };
   // Runs an action: token, control, audit, JSON answer or JSON error.
-  using Action = std::function<nlohmann::json(const nlohmann::json& body, const std::string& client)>;
+  using Action = std::function<nlohmann::json(const Call& call)>;
   void action(const std::string& pattern, const std::string& name, bool needs_control, Action act);
   void read(const std::string& pattern, std::function<nlohmann::json()> answer);
+  // Answers a GET: the token checked, the client's lease renewed, refusals as JSON errors.
+  void guarded(const httplib::Request& request, httplib::Response& response,
+               const std::function<void()>& answer);
   void check_token(const httplib::Request& request) const;
 
   Station& station_;
