@@ -27,9 +27,9 @@ const require = createRequire(path.join(env('LIGHTSTAGE_NODE_DEPS'), 'package.js
 const { chromium } = require('playwright-core');
 
 // Starts the station; resolves with its address once it printed it.
-function startStation(data) {
+function startStation(data, more = []) {
   const child = spawn(bin, ['serve', '--simulated', '--width', '128', '--height', '128', '--noise', 'none',
-    '--listen', '127.0.0.1:0', '--data', data], { stdio: ['ignore', 'pipe', 'pipe'] });
+    '--listen', '127.0.0.1:0', '--data', data, ...more], { stdio: ['ignore', 'pipe', 'pipe'] });
   let output = '';
   return new Promise((resolve, reject) => {
     const timer = setTimeout(() => reject(new Error(`no address from lightstage serve:\n${output}`)), 60000);
@@ -99,6 +99,16 @@ test('an operator runs the simulated dome from the page, calibration to report',
     await page.fill('#operator-name', 'Ann');
     await page.click('#take-control');
     await page.waitForSelector('#release');
+
+    // A second operator's tab: read-only while Ann has control.
+    const other = await (await browser.newContext({ viewport: { width: 1280, height: 900 } })).newPage();
+    watch(other, 'second tab');
+    await other.goto(station.url);
+    await other.waitForFunction(() => /Ann controls the dome/.test(document.querySelector('.role.viewer')?.textContent ?? ''));
+    assert.ok(await other.isDisabled('#test-sequence'));
+    assert.equal(await other.$$eval('#led-map circle.pickable', (c) => c.length), 0);
+    await other.screenshot({ path: path.join(scratch, 'viewer.png') });
+    await other.close();
 
     // Dome: an LED lit from the map, then put out.
     await page.click('#led-map circle[data-led="5"]');
@@ -179,6 +189,17 @@ test('an operator runs the simulated dome from the page, calibration to report',
     await page.waitForFunction(() => document.querySelector('input[data-place="object"]').checked);
     await page.fill('#capture-name', 'bunny');
     await startJob(page, () => page.click('#capture-start'));
+    // Paused part way, then resumed from the stack list.
+    await page.waitForFunction(() => {
+      const done = /(\d+) \/ 96 frames/.exec(document.querySelector('#job')?.textContent ?? '');
+      return done && Number(done[1]) >= 20;
+    }, null, { timeout: 60000 });
+    await page.click('#job-stop');
+    await page.waitForFunction(() => document.querySelector('#job-state')?.textContent === 'stopped', null, { timeout: 60000 });
+    await page.waitForSelector('#stacks tr[data-stack="bunny"] button.resume');
+    assert.match(await page.textContent('#stacks tr[data-stack="bunny"]'), /incomplete/);
+    await page.screenshot({ path: path.join(scratch, 'capture-paused.png'), fullPage: true });
+    await startJob(page, () => page.click('#stacks tr[data-stack="bunny"] button.resume'));
     await jobEnds(page);
     await page.waitForSelector('#stacks tr[data-stack="bunny"]');
     assert.match(await page.textContent('#stacks tr[data-stack="bunny"]'), /96 \/ 96/);
@@ -208,11 +229,40 @@ test('an operator runs the simulated dome from the page, calibration to report',
 
     // Every action in the audit log, by the operator who took control.
     const audit = fs.readFileSync(path.join(scratch, 'data', 'audit.log'), 'utf8').trim().split('\n').map(JSON.parse);
-    for (const action of ['control.take', 'leds.set', 'preview', 'place', 'capture.start', 'sphere.draw', 'sphere.forget',
+    for (const action of ['control.take', 'job.stop', 'capture.resume', 'leds.set', 'preview', 'place', 'capture.start', 'sphere.draw', 'sphere.forget',
       'calibration.start', 'solve.start', 'export.start']) {
       assert.ok(audit.some((l) => l.action === action && l.outcome === 'ok' && l.name === 'Ann'), `no ${action} by Ann in the audit log`);
     }
     assert.deepEqual(problems, []);
+  } finally {
+    await browser.close();
+    station.child.kill('SIGTERM');
+  }
+});
+
+test('a station with a token refuses a page without it, and keeps it out of the address bar', { timeout: 120000 }, async () => {
+  const dir = path.join(scratch, 'token');
+  fs.rmSync(dir, { recursive: true, force: true });
+  const station = await startStation(path.join(dir, 'data'), ['--token', '5be4c2a1d0e9f8a7b6c5d4e3f2a1b0c9']);
+  assert.match(station.url, /\?token=5be4c2a1d0e9f8a7b6c5d4e3f2a1b0c9$/);
+  const browser = await chromium.launch({
+    executablePath: chromiumPath,
+    args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
+      '--disable-component-update', '--disable-sync'],
+  });
+  try {
+    const page = await browser.newPage();
+    const bare = new URL(station.url);
+    bare.search = '';
+    await page.goto(bare.href);
+    await page.waitForSelector('#error');
+    assert.match(await page.textContent('#error'), /token/);
+    assert.match(await page.textContent('#dome-state'), /unreachable/);
+    await page.goto(station.url);
+    await page.waitForFunction(() => /dome idle/.test(document.querySelector('#dome-state')?.textContent ?? ''));
+    assert.equal(new URL(page.url()).search, '', 'the token stayed in the address bar');
+    await page.reload();
+    await page.waitForFunction(() => /dome idle/.test(document.querySelector('#dome-state')?.textContent ?? ''));
   } finally {
     await browser.close();
     station.child.kill('SIGTERM');
