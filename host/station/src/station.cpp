@@ -70,6 +70,7 @@ Station::Station(StationOptions options) : options_(std::move(options)), rig_(lo
   // Connected at once, so a wrong URI shows when the page first loads; not fatal: the page says why.
   const std::lock_guard lock(dome_mutex_);
   try {
+    may_reconnect();
     dome();
   } catch (const std::exception& e) {
     drop_dome(e.what());
@@ -101,6 +102,15 @@ pipeline::DomeConnection& Station::dome() {
   return *dome_;
 }
 
+// A dome that does not answer takes seconds to give up on: the status polls
+// of every page try again at most every few seconds, not each time.
+bool Station::may_reconnect() {
+  const auto now = std::chrono::steady_clock::now();
+  if (now - last_connect_attempt_ < std::chrono::seconds(5)) return false;
+  last_connect_attempt_ = now;
+  return true;
+}
+
 void Station::drop_dome(const std::string& why) {
   dome_.reset();
   const std::lock_guard lock(state_mutex_);
@@ -123,7 +133,7 @@ bool Station::lit_by_hand() const {
 
 nlohmann::json Station::status() {
   // The controller is asked only when no job talks to it; otherwise its last answer stands.
-  if (std::unique_lock lock(dome_mutex_, std::try_to_lock); lock.owns_lock()) {
+  if (std::unique_lock lock(dome_mutex_, std::try_to_lock); lock.owns_lock() && (dome_ || may_reconnect())) {
     try {
       auto& connection = dome();
       const proto::Status status = connection.controller->status();
@@ -456,6 +466,11 @@ nlohmann::json Station::start_capture(const CaptureRequest& request) {
   if (fs::exists(out))
     throw Refused(409,
                   fmt::format("stacks/{} exists: resume it, or capture under another name", request.name));
+  {
+    const std::lock_guard lock(job_mutex_);
+    if (job_ && job_->running())
+      throw Refused(409, fmt::format("a {} is running: stop it or wait for it to end", job_->kind()));
+  }
   // The request is kept so that a resume (after a stop, a crash, a lost link) repeats it exactly.
   write_json_atomically(options_.data / ".station" / "captures" / (request.name + ".json"),
                         request.to_json());

@@ -20,6 +20,7 @@
 #include "lightstage/station/station_requests.hpp"
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -100,6 +101,7 @@ class Station {
   // The connected dome (connecting when needed); dome_mutex_ held by the caller.
   pipeline::DomeConnection& dome();
   void drop_dome(const std::string& why);  // after a failure: reconnect next time
+  bool may_reconnect();                    // dome_mutex_ held
   nlohmann::json capture_work(StationJob& job, const CaptureRequest& request, bool resume);
   nlohmann::json calibration_work(StationJob& job, const CalibrationRequest& request);
   nlohmann::json solve_work(StationJob& job, const SolveRequest& request);
@@ -114,6 +116,7 @@ class Station {
 
   std::mutex dome_mutex_;  // the controller and camera: one user at a time
   std::optional<pipeline::DomeConnection> dome_;
+  std::chrono::steady_clock::time_point last_connect_attempt_{};
 
   mutable std::mutex state_mutex_;  // what status() reports
   std::string dome_error_;
