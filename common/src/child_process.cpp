@@ -39,6 +39,12 @@ ChildProcess::ChildProcess(const std::filesystem::path& program, const std::vect
   pid_ = ::fork();
   if (pid_ == 0) {
     ::close(status_pipe[0]);
+    // A signal mask is inherited through exec: a parent that blocks SIGTERM to
+    // take it with sigwait (`lightstage serve`) would leave its children deaf to
+    // it, and to the death signal below.
+    sigset_t none;
+    ::sigemptyset(&none);
+    ::pthread_sigmask(SIG_SETMASK, &none, nullptr);
     // The child must not outlive us: a killed `lightstage demo` takes its dome down with it.
     ::prctl(PR_SET_PDEATHSIG, SIGTERM);
     if (::getppid() != parent) ::_exit(127);

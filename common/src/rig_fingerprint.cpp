@@ -70,13 +70,15 @@ std::string canonical_rig_text(const Rig& rig) {
   return out;
 }
 
-std::string rig_fingerprint(const Rig& rig) {
+std::string content_hash(std::string_view bytes) {
   std::uint64_t hash = 14695981039346656037ull;  // FNV-1a 64-bit offset basis
-  for (const unsigned char c : canonical_rig_text(rig)) {
+  for (const unsigned char c : bytes) {
     hash ^= c;
     hash *= 1099511628211ull;  // FNV prime
   }
   return fmt::format("{:016x}", hash);
 }
+
+std::string rig_fingerprint(const Rig& rig) { return content_hash(canonical_rig_text(rig)); }
 
 }  // namespace lightstage

@@ -110,6 +110,28 @@ TEST(CaptureRunner, BracketsAreTakenGroupByGroupEachAtItsExposuresShortestFirst)
                                  {4, 125}, {5, 125}, {4, 1000}, {5, 1000}, {6, 250}, {6, 1000}}));
 }
 
+// A stop asked for while a group's brackets are being taken waits for its
+// last exposure: the group is handed on whole, then the capture stops.
+TEST(CaptureRunner, AStopWithinABracketGroupEndsTheGroupFirst) {
+  Bench bench(/*max_steps=*/2);
+  CaptureOptions options;
+  // Asked for as soon as the first exposure was taken, mid-way through the first group.
+  options.stop_requested = [&] { return !bench.cam.shots.empty(); };
+  CaptureRunner runner(*bench.client, bench.cam, options);
+  runner.start();
+  const CapturePlan plan = make_plan({4, 5, 6}, {{4, 1000}, {5, 1000}, {6, 1000}},
+                                     {{4, {125, 1000}}, {5, {125, 1000}}, {6, {250, 1000}}}, {-3, 0}, 0);
+  std::vector<std::size_t> handed;
+  EXPECT_THROW(runner.take_frames(plan, {},
+                                  [&](std::size_t frame, std::vector<Take>& takes) {
+                                    handed.push_back(frame);
+                                    EXPECT_EQ(takes.size(), 2u);
+                                  }),
+               CaptureStopped);
+  EXPECT_EQ(handed, (std::vector<std::size_t>{0, 1}));
+  EXPECT_EQ(bench.cam.shots, (std::vector<std::pair<int, double>>{{4, 125}, {5, 125}, {4, 1000}, {5, 1000}}));
+}
+
 TEST(CaptureRunner, FramesExposedBeforeAWatchdogAbortAreHandedOnThenTheAbortIsThrown) {
   Bench bench;
   bench.cam.hardware = true;

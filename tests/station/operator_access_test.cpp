@@ -80,6 +80,10 @@ TEST(OperatorAccess, TokensAreRandomAndLoopbackIsKnown) {
   EXPECT_FALSE(is_loopback_address("0.0.0.0"));
   EXPECT_FALSE(is_loopback_address("192.168.1.20"));
   EXPECT_FALSE(is_loopback_address("::"));
+  EXPECT_TRUE(is_loopback_address("127.1.2.3"));
+  // Names that merely start like a loopback address resolve anywhere.
+  EXPECT_FALSE(is_loopback_address("127.0.0.1.example.org"));
+  EXPECT_FALSE(is_loopback_address("127.evil"));
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 
 #include "lightstage/testing/paths.hpp"
 
+#include <fmt/format.h>
 #include <httplib.h>
 #include <opencv2/imgcodecs.hpp>
 
@@ -248,6 +249,75 @@ TEST(StationApi, WithATokenEveryRequestMustCarryIt) {
   EXPECT_EQ(station.get("/api/status", "tab-a", options.token).status, 200);
   EXPECT_EQ(station.get("/api/status?token=" + options.token).status, 200);
   EXPECT_EQ(station.post("/api/control", "{\"name\": \"Ann\"}", "tab-a", options.token).status, 200);
+  // Whoever reaches the port without the token cannot fill the audit log.
+  for (int i = 0; i < 20; ++i) EXPECT_EQ(station.post("/api/dark", "{}", "tab-x", "").status, 401);
+  const auto lines = audit_lines(station.station().data());
+  ASSERT_FALSE(lines.empty());
+  for (const json& line : lines) EXPECT_EQ(line["outcome"], "ok") << line.dump();
+}
+
+TEST(StationApi, FilesStayInTheirFoldersAndActionsComeFromThePageOnLoopback) {
+  StationUnderTest station;
+  ASSERT_EQ(station.post("/api/control", json{{"name", "Ann"}}).status, 200);
+  const fs::path result = station.station().data() / "results" / "r";
+  fs::create_directories(result);
+  std::ofstream(result / "notes.txt") << "kept\n";
+  std::ofstream(result / ".bands-1.spill") << "not served\n";
+  EXPECT_EQ(station.get("/files/results/r/notes.txt").text, "kept\n");
+  for (const char* path :
+       {"/files/stacks/../audit.log", "/files/stacks/%2e%2e/audit.log", "/files/results/r/../../audit.log",
+        "/files/results/r/.bands-1.spill", "/files/results/../.station/dome/1-object/domed.log",
+        "/files/results//etc/passwd"}) {
+    const Answer a = station.get(path);
+    EXPECT_EQ(a.status, 404) << path << ": " << a.text.substr(0, 200);
+  }
+  httplib::Client http("127.0.0.1", station.port());
+  // A page elsewhere reaching 127.0.0.1 under its own name (DNS rebinding).
+  auto rebound = http.Get("/api/status", {{"Host", "rebind.example.org:8080"}, {"X-Lightstage-Client", "x"}});
+  ASSERT_TRUE(rebound);
+  EXPECT_EQ(rebound->status, 403) << rebound->body;
+  EXPECT_NE(rebound->body.find("rebind.example.org"), std::string::npos) << rebound->body;
+  auto named = http.Get("/api/status", {{"Host", "127.0.0.1.rebind.example.org"}});
+  ASSERT_TRUE(named);
+  EXPECT_EQ(named->status, 403);
+  auto local = http.Get("/api/status", {{"Host", fmt::format("localhost:{}", station.port())}});
+  ASSERT_TRUE(local);
+  EXPECT_EQ(local->status, 200);
+  // A cross-site form cannot set the client id: actions without it are refused.
+  auto form = http.Post("/api/dark", "", "application/x-www-form-urlencoded");
+  ASSERT_TRUE(form);
+  EXPECT_EQ(form->status, 403) << form->body;
+  EXPECT_EQ(station.post("/api/dark", json::object(), "tab-b").status, 200);
+}
+
+TEST(StationApi, DarkFromAnyTabCutsTheTestSequenceShort) {
+  StationUnderTest station;
+  ASSERT_EQ(station.post("/api/control", json{{"name", "Ann"}}).status, 200);
+  EXPECT_EQ(station.post("/api/test-sequence", json{{"on_us", 5'000'000}}).status, 400);
+  EXPECT_EQ(station.post("/api/test-sequence", json{{"pace", 1}}).status, 400);
+  // 96 LEDs lit 50 ms each: about 5 s to walk the dome.
+  ASSERT_EQ(station.post("/api/test-sequence", json{{"on_us", 50'000}}).status, 200);
+  json job;
+  const auto deadline = std::chrono::steady_clock::now() + seconds(30);
+  do {
+    job = station.get("/api/job").body;
+    std::this_thread::sleep_for(milliseconds(5));
+  } while (job["state"] == "running" && job["done"].get<int>() < 3 &&
+           std::chrono::steady_clock::now() < deadline);
+  ASSERT_EQ(job["state"], "running") << job.dump();
+  // A viewer darkens the dome: the running job must not keep it lit.
+  const Answer dark = station.post("/api/dark", json::object(), "tab-b");
+  ASSERT_EQ(dark.status, 200) << dark.text;
+  job = station.wait_job("tab-a", seconds(10));
+  EXPECT_EQ(job["state"], "stopped") << job.dump();
+  EXPECT_LT(job["done"].get<int>(), 96);
+  EXPECT_TRUE(station.get("/api/status").body["dome"]["controller"]["leds_on"].empty());
+  EXPECT_TRUE(station.get("/api/status").body["dome"]["lit"].empty());
+  // A finished job is not stopped again; the dome takes hand-lit LEDs again.
+  EXPECT_EQ(station.post("/api/job/stop", json::object()).status, 409);
+  EXPECT_EQ(station.post("/api/leds", json{{"leds", {{{"id", 7}}}}}).status, 200);
+  EXPECT_EQ(station.post("/api/dark", json::object(), "tab-b").status, 200);
+  EXPECT_TRUE(station.get("/api/status").body["dome"]["controller"]["leds_on"].empty());
 }
 
 TEST(StationApi, NoTokenIsRefusedOffLoopback) {
@@ -410,6 +480,17 @@ TEST(StationApi, TheSpheresOutlineIsFoundDrawnAndForgotten) {
   EXPECT_EQ(cv::countNonZero(cv::imread(mask.string(), cv::IMREAD_GRAYSCALE)), 64 * 64);
   EXPECT_EQ(station.post("/api/stacks/c1/sphere/forget", json::object()).status, 409);
   EXPECT_TRUE(fs::exists(mask));
+
+  // Drawn here, then replaced by the operator's own mask: that one is left alone too.
+  fs::remove(mask);
+  ASSERT_EQ(station.post("/api/stacks/c1/sphere", json{{"x_px", x}, {"y_px", y}, {"radius_px", r}}).status,
+            200);
+  ASSERT_TRUE(cv::imwrite(mask.string(), cv::Mat(64, 64, CV_8UC1, cv::Scalar(255))));
+  EXPECT_FALSE(station.get("/api/stacks/c1/sphere").body["drawn"].get<bool>());
+  EXPECT_EQ(station.post("/api/stacks/c1/sphere", json{{"x_px", x}, {"y_px", y}, {"radius_px", r}}).status,
+            409);
+  EXPECT_EQ(station.post("/api/stacks/c1/sphere/forget", json::object()).status, 409);
+  EXPECT_EQ(cv::countNonZero(cv::imread(mask.string(), cv::IMREAD_GRAYSCALE)), 64 * 64);
 }
 
 }  // namespace

@@ -100,7 +100,7 @@ void CaptureRunner::set_exposure(double exposure_us) {
 
 Batch CaptureRunner::run_batch(const std::vector<Shot>& shots) {
   if (shots.empty()) return {};
-  if (options_.stop_requested && options_.stop_requested())
+  if (!mid_group_ && options_.stop_requested && options_.stop_requested())
     throw CaptureStopped("the capture was stopped as asked");
   set_exposure(shots.front().exposure_us);
   Batch batch = hardware_ ? run_batch_once(shots) : run_software_batch(shots);
@@ -373,6 +373,10 @@ void CaptureRunner::take_frames(const CapturePlan& plan, const std::vector<bool>
       for (const std::size_t i : group)
         exposures.insert(plan.frames[i].bracket.begin(), plan.frames[i].bracket.end());
       std::map<std::size_t, std::vector<Take>> takes_of;  // by frame index
+      struct GroupEnd {
+        bool& mid_group;
+        ~GroupEnd() { mid_group = false; }
+      } group_end{mid_group_};
       for (const std::size_t exposure : exposures) {
         std::vector<Shot> shots;
         std::vector<std::size_t> owner;
@@ -396,6 +400,7 @@ void CaptureRunner::take_frames(const CapturePlan& plan, const std::vector<bool>
           throw;
         }
         add(batch);
+        mid_group_ = true;
       }
       for (const std::size_t i : group) on_frame(i, takes_of.at(i));
     }

@@ -1,5 +1,7 @@
 #include "lightstage/station/operator_access.hpp"
 
+#include <arpa/inet.h>
+
 #include <fmt/format.h>
 
 #include <random>
@@ -83,7 +85,10 @@ std::string random_token() {
 }
 
 bool is_loopback_address(const std::string& host) {
-  return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0;
+  if (host == "localhost" || host == "::1") return true;
+  // An address, not a name that starts like one ("127.0.0.1.example.org").
+  in_addr address{};
+  return ::inet_pton(AF_INET, host.c_str(), &address) == 1 && (ntohl(address.s_addr) >> 24) == 127;
 }
 
 }  // namespace lightstage::station

@@ -7,17 +7,72 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <fstream>
+#include <utility>
 
 namespace lightstage::station {
 
 namespace fs = std::filesystem;
 
-SimulatedBench::SimulatedBench(SimulatedBenchOptions options) : options_(std::move(options)) {
-  start("object");
+SimulatedBench::SimulatedBench(SimulatedBenchOptions options)
+    : options_(std::move(options)), launcher_([this] { launcher_loop(); }) {
+  try {
+    on_launcher([this] { start("object"); });
+  } catch (...) {
+    {
+      const std::lock_guard lock(launch_mutex_);
+      launcher_quit_ = true;
+    }
+    launch_changed_.notify_all();
+    launcher_.join();
+    throw;
+  }
 }
 
-SimulatedBench::~SimulatedBench() = default;
+SimulatedBench::~SimulatedBench() {
+  {
+    const std::lock_guard lock(mutex_);
+    dome_.reset();  // the programs end here, not by the launcher's death signal
+  }
+  {
+    const std::lock_guard lock(launch_mutex_);
+    launcher_quit_ = true;
+  }
+  launch_changed_.notify_all();
+  launcher_.join();
+}
+
+void SimulatedBench::launcher_loop() {
+  std::unique_lock lock(launch_mutex_);
+  for (;;) {
+    launch_changed_.wait(lock, [this] { return launcher_quit_ || launch_task_; });
+    if (launcher_quit_) return;
+    const std::function<void()> task = std::move(launch_task_);
+    launch_task_ = nullptr;
+    lock.unlock();
+    std::exception_ptr error;
+    try {
+      task();
+    } catch (...) {
+      error = std::current_exception();
+    }
+    lock.lock();
+    launch_error_ = error;
+    launch_done_ = true;
+    launch_changed_.notify_all();
+  }
+}
+
+void SimulatedBench::on_launcher(const std::function<void()>& task) {
+  const std::lock_guard one_caller(launch_caller_mutex_);
+  std::unique_lock lock(launch_mutex_);
+  launch_task_ = task;
+  launch_done_ = false;
+  launch_changed_.notify_all();
+  launch_changed_.wait(lock, [this] { return launch_done_; });
+  if (launch_error_) std::rethrow_exception(std::exchange(launch_error_, nullptr));
+}
 
 std::vector<std::string> SimulatedBench::choices() const {
   std::vector<std::string> names = {"object"};
@@ -26,16 +81,42 @@ std::vector<std::string> SimulatedBench::choices() const {
   return names;
 }
 
-void SimulatedBench::place(const std::string& what) {
+void SimulatedBench::check_choice(const std::string& what) const {
   const auto names = choices();
   if (std::find(names.begin(), names.end(), what) == names.end())
     throw Refused(400, fmt::format("place: '{}' is none of {}", what, fmt::join(names, ", ")));
-  if (what == placed_) return;
-  start(what);
+}
+
+void SimulatedBench::place(const std::string& what) {
+  check_choice(what);
+  if (what == placed()) return;
+  on_launcher([&] { start(what); });
+}
+
+std::string SimulatedBench::placed() const {
+  const std::lock_guard lock(mutex_);
+  return placed_;
+}
+
+std::string SimulatedBench::controller_uri() const {
+  const std::lock_guard lock(mutex_);
+  if (!dome_) throw Error("the simulated dome's programs are not running (the last placement failed)");
+  return dome_->controller_uri();
+}
+
+std::string SimulatedBench::camera_uri() const {
+  const std::lock_guard lock(mutex_);
+  if (!dome_) throw Error("the simulated dome's programs are not running (the last placement failed)");
+  return dome_->camera_uri();
 }
 
 void SimulatedBench::start(const std::string& what) {
-  dome_.reset();  // the programs stop (the dome dark) before others start on the same sockets
+  {
+    // The programs stop (the dome dark) before others start on the same sockets.
+    const std::lock_guard lock(mutex_);
+    dome_.reset();
+    placed_.clear();
+  }
   std::vector<std::string> args = {"--noise",  options_.noise, "--seed", std::to_string(options_.seed),
                                    "--lights", "near"};
   if (what == "object") {
@@ -59,12 +140,14 @@ void SimulatedBench::start(const std::string& what) {
   dome.program_dir = options_.programs;
   dome.sim_args = args;
   dome.camera = true;
-  dome_ = std::make_unique<SimulatedDome>(dome);
+  auto started = std::make_unique<SimulatedDome>(dome);
+  const std::lock_guard lock(mutex_);
+  dome_ = std::move(started);
   placed_ = what;
 }
 
 nlohmann::json SimulatedBench::to_json() const {
-  return {{"placed", placed_}, {"choices", choices()}, {"scene", options_.scene}};
+  return {{"placed", placed()}, {"choices", choices()}, {"scene", options_.scene}};
 }
 
 }  // namespace lightstage::station

@@ -2,6 +2,7 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
+#include "lightstage/common/rig_fingerprint.hpp"
 #include "lightstage/host/calibration/calibrate_lights.hpp"
 #include "lightstage/host/calibration/calibration_images.hpp"
 #include "lightstage/host/calibration/calibration_output.hpp"
@@ -22,6 +23,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iterator>
 
 namespace lightstage::station {
 
@@ -56,6 +58,19 @@ nlohmann::json controller_json(const proto::Info& info, const proto::Status& sta
           {"last_fault", status.last_fault()}};
 }
 
+std::string file_bytes(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// Whether the stack's mask.png is still the outline this station drew (its
+// marker holds the mask's hash): anything else there is the operator's, not ours to replace.
+bool drawn_here(const fs::path& stack, const fs::path& marker) {
+  const nlohmann::json drawn = read_json_or_null(marker);
+  return drawn.is_object() && drawn.contains("mask_hash") && fs::exists(stack / "mask.png") &&
+         drawn["mask_hash"] == content_hash(file_bytes(stack / "mask.png"));
+}
+
 }  // namespace
 
 Station::Station(StationOptions options) : options_(std::move(options)), rig_(load_rig(options_.rig)) {
@@ -80,26 +95,34 @@ Station::Station(StationOptions options) : options_(std::move(options)), rig_(lo
 Station::~Station() {
   {
     const std::lock_guard lock(job_mutex_);
-    if (job_) job_->request_stop();
+    if (job_ && job_->stoppable()) job_->request_stop();
   }
   wait_job();
-  const std::lock_guard lock(dome_mutex_);
   try {
-    if (dome_) dome_->controller->all_off();
+    if (const auto connection = connected()) connection->controller->all_off();
   } catch (const std::exception& e) {
     logger("station")->warn("could not darken the dome on the way out (its watchdog will): {}", e.what());
   }
 }
 
-pipeline::DomeConnection& Station::dome() {
-  if (!dome_) {
-    const std::string controller = bench_ ? bench_->controller_uri() : options_.controller_uri;
-    const std::string camera = bench_ ? bench_->camera_uri() : options_.camera_uri;
-    dome_ = pipeline::connect_dome(options_.rig, controller, camera);
-    const std::lock_guard lock(state_mutex_);
-    dome_error_.clear();
+std::shared_ptr<pipeline::DomeConnection> Station::connected() const {
+  const std::lock_guard lock(link_mutex_);
+  return dome_;
+}
+
+std::shared_ptr<pipeline::DomeConnection> Station::dome() {
+  if (auto connection = connected()) return connection;
+  const std::string controller = bench_ ? bench_->controller_uri() : options_.controller_uri;
+  const std::string camera = bench_ ? bench_->camera_uri() : options_.camera_uri;
+  auto connection =
+      std::make_shared<pipeline::DomeConnection>(pipeline::connect_dome(options_.rig, controller, camera));
+  {
+    const std::lock_guard lock(link_mutex_);
+    dome_ = connection;
   }
-  return *dome_;
+  const std::lock_guard lock(state_mutex_);
+  dome_error_.clear();
+  return connection;
 }
 
 // A dome that does not answer takes seconds to give up on: the status polls
@@ -112,7 +135,10 @@ bool Station::may_reconnect() {
 }
 
 void Station::drop_dome(const std::string& why) {
-  dome_.reset();
+  {
+    const std::lock_guard lock(link_mutex_);
+    dome_.reset();
+  }
   const std::lock_guard lock(state_mutex_);
   dome_error_ = why;
   controller_ = nullptr;
@@ -133,12 +159,13 @@ bool Station::lit_by_hand() const {
 
 nlohmann::json Station::status() {
   // The controller is asked only when no job talks to it; otherwise its last answer stands.
-  if (std::unique_lock lock(dome_mutex_, std::try_to_lock); lock.owns_lock() && (dome_ || may_reconnect())) {
+  if (std::unique_lock lock(dome_mutex_, std::try_to_lock);
+      lock.owns_lock() && (connected() || may_reconnect())) {
     try {
-      auto& connection = dome();
-      const proto::Status status = connection.controller->status();
+      const auto connection = dome();
+      const proto::Status status = connection->controller->status();
       const std::lock_guard state(state_mutex_);
-      controller_ = controller_json(connection.controller->info(), status);
+      controller_ = controller_json(connection->controller->info(), status);
     } catch (const std::exception& e) {
       drop_dome(e.what());
     }
@@ -248,7 +275,7 @@ void Station::set_leds(const LedsRequest& request) {
   std::unique_lock lock(dome_mutex_, std::try_to_lock);
   if (!lock.owns_lock()) throw Refused(409, "the dome is busy with the running job");
   try {
-    dome().controller->set_leds(request.levels);
+    dome()->controller->set_leds(request.levels);
   } catch (const ControllerError& e) {
     throw Refused(e.code() == proto::Error::BAD_REQUEST ? 400 : 409,
                   fmt::format("the controller refused: {}", e.what()));
@@ -260,27 +287,51 @@ void Station::set_leds(const LedsRequest& request) {
 }
 
 void Station::dark() {
+  std::string sequence;  // the job running a controller sequence, if one does
   {
     const std::lock_guard lock(job_mutex_);
-    if (job_ && job_->running()) job_->request_stop();  // its controller sequence ends dark
+    if (job_ && job_->running() && (job_->kind() == "capture" || job_->kind() == "test-sequence")) {
+      job_->request_stop();
+      sequence = job_->kind();
+    }
   }
-  std::unique_lock lock(dome_mutex_, std::try_to_lock);
-  if (!lock.owns_lock()) return;
+  std::shared_ptr<pipeline::DomeConnection> connection = connected();
+  if (!connection) {
+    // Not connected: connect now when no one else is talking to the dome.
+    std::unique_lock lock(dome_mutex_, std::try_to_lock);
+    if (!lock.owns_lock()) throw Error("the dome is not connected: its watchdog darkens it");
+    try {
+      connection = dome();
+    } catch (const std::exception& e) {
+      drop_dome(e.what());
+      throw Error(fmt::format("the dome is not connected ({}): its watchdog darkens it", e.what()));
+    }
+  }
+  ControllerClient& controller = *connection->controller;
   try {
-    if (dome_) dome_->controller->all_off();
-    set_lit({}, false);
+    // A capture's sequence is left to end (its frames are kept; it ends dark);
+    // the test sequence's long walk over every LED is cut short.
+    if (sequence == "test-sequence") controller.abort();
+    if (sequence != "capture") controller.all_off();
+  } catch (const ControllerError& e) {
+    throw Refused(409, fmt::format("the controller refused to darken: {}", e.what()));
   } catch (const std::exception& e) {
     drop_dome(e.what());
     throw;
   }
+  if (sequence != "capture") set_lit({}, false);
 }
 
 Preview Station::preview(const PreviewRequest& request) {
+  const Led* led = nullptr;
   try {
-    rig_.led(static_cast<int>(request.led));
+    led = &rig_.led(static_cast<int>(request.led));
   } catch (const InputError&) {
     throw Refused(400, fmt::format("preview.led: the rig '{}' has no LED {}", rig_.name, request.led));
   }
+  if (led->limits.max_on_us > 0 && request.exposure_us > led->limits.max_on_us)
+    throw Refused(400, fmt::format("preview.exposure_us: {} us is longer than LED {} may stay on ({} us)",
+                                   request.exposure_us, request.led, led->limits.max_on_us));
   std::unique_lock lock(dome_mutex_, std::try_to_lock);
   if (!lock.owns_lock()) throw Refused(409, "the dome is busy with the running job");
   CaptureOptions options;
@@ -288,14 +339,18 @@ Preview Station::preview(const PreviewRequest& request) {
   options.mode = OutputMode::kQuiet;
   std::vector<cv::Mat> frames;
   try {
-    auto& connection = dome();
+    const auto connection = dome();
     set_lit({{request.led, 1.0f}}, false);
-    frames = capture_bracket(rig_, *connection.controller, *connection.camera, static_cast<int>(request.led),
-                             {request.exposure_us}, options);
+    frames = capture_bracket(rig_, *connection->controller, *connection->camera,
+                             static_cast<int>(request.led), {request.exposure_us}, options);
     set_lit({}, false);
   } catch (const InputError& e) {
     set_lit({}, false);
     throw Refused(400, e.what());
+  } catch (const ControllerError& e) {
+    set_lit({}, false);
+    throw Refused(e.code() == proto::Error::BAD_REQUEST ? 400 : 409,
+                  fmt::format("the controller refused: {}", e.what()));
   } catch (const std::exception& e) {
     drop_dome(e.what());
     throw;
@@ -305,6 +360,7 @@ Preview Station::preview(const PreviewRequest& request) {
 
 void Station::place(const std::string& what) {
   if (!bench_) throw Refused(400, "place: this station runs a real dome; place the object by hand");
+  bench_->check_choice(what);
   {
     const std::lock_guard lock(job_mutex_);
     if (job_ && job_->running()) throw Refused(409, fmt::format("a {} is running", job_->kind()));
@@ -319,21 +375,35 @@ void Station::place(const std::string& what) {
   }
 }
 
-nlohmann::json Station::start_job(const std::string& kind, nlohmann::json request, Work work) {
+nlohmann::json Station::start_job(const std::string& kind, nlohmann::json request, bool stoppable,
+                                  Work work) {
   const std::lock_guard lock(job_mutex_);
   if (job_ && job_->running())
     throw Refused(409, fmt::format("a {} is running: stop it or wait for it to end", job_->kind()));
   job_.reset();  // the last one ended: its thread is joined
   abort_ = false;
-  job_ = std::make_unique<StationJob>(next_job_id_++, kind, std::move(request), std::move(work));
+  job_ = std::make_shared<StationJob>(next_job_id_++, kind, std::move(request), stoppable, std::move(work));
   return job_->to_json();
 }
 
 void Station::stop_job(bool abort) {
-  const std::lock_guard lock(job_mutex_);
-  if (!job_ || !job_->running()) throw Refused(409, "no job is running");
-  abort_ = abort;
-  job_->request_stop();
+  std::string kind;
+  {
+    const std::lock_guard lock(job_mutex_);
+    if (!job_ || !job_->running()) throw Refused(409, "no job is running");
+    if (!job_->stoppable())
+      throw Refused(409, fmt::format("a {} cannot be stopped: it ends by itself", job_->kind()));
+    abort_ = abort;
+    job_->request_stop();
+    kind = job_->kind();
+  }
+  if (kind != "test-sequence") return;
+  // Its one sequence walks every LED: cut short now, not at its end.
+  try {
+    if (const auto connection = connected()) connection->controller->abort();
+  } catch (const ControllerError&) {
+    // It ended meanwhile.
+  }
 }
 
 nlohmann::json Station::job_json() const {
@@ -342,10 +412,10 @@ nlohmann::json Station::job_json() const {
 }
 
 void Station::wait_job() {
-  StationJob* job = nullptr;
+  std::shared_ptr<StationJob> job;
   {
     const std::lock_guard lock(job_mutex_);
-    job = job_.get();
+    job = job_;
   }
   if (job) job->wait();
 }
@@ -364,7 +434,7 @@ nlohmann::json Station::sphere(const std::string& name) const {
                       {"height", images.height()},
                       {"circle", nullptr},
                       {"error", ""}};
-  j["drawn"] = fs::exists(options_.data / ".station" / "spheres" / (name + ".json"));
+  j["drawn"] = drawn_here(folder("stacks", name), options_.data / ".station" / "spheres" / (name + ".json"));
   try {
     const auto circles = calibration::find_sphere_circles(images, calibration::LightCalibrationOptions{});
     const calibration::ImageCircle& c = circles.front();
@@ -391,7 +461,7 @@ std::string Station::sphere_png(const std::string& name) const {
 nlohmann::json Station::set_sphere(const std::string& name, const SphereCircle& circle) {
   const fs::path stack = existing_stack(name);
   const fs::path marker = options_.data / ".station" / "spheres" / (name + ".json");
-  if (fs::exists(stack / "mask.png") && !fs::exists(marker))
+  if (fs::exists(stack / "mask.png") && !drawn_here(stack, marker))
     throw Refused(409, fmt::format("stacks/{}/mask.png was not drawn here: it is left as it is", name));
   const nlohmann::json manifest = read_json_or_null(stack / "manifest.json");
   const int width = manifest.is_object() ? manifest.value("width", 0) : 0;
@@ -407,43 +477,58 @@ nlohmann::json Station::set_sphere(const std::string& name, const SphereCircle& 
   const auto fixed = [](double v) { return static_cast<int>(std::lround(v * (1 << kShift))); };
   cv::circle(mask, cv::Point(fixed(circle.x_px - 0.5), fixed(circle.y_px - 0.5)), fixed(circle.radius_px),
              cv::Scalar(255), cv::FILLED, cv::LINE_8, kShift);
-  write_json_atomically(marker,
-                        {{"x_px", circle.x_px}, {"y_px", circle.y_px}, {"radius_px", circle.radius_px}});
   io::write_png(stack / "mask.png", mask);
+  write_json_atomically(marker, {{"x_px", circle.x_px},
+                                 {"y_px", circle.y_px},
+                                 {"radius_px", circle.radius_px},
+                                 {"mask_hash", content_hash(file_bytes(stack / "mask.png"))}});
   return sphere(name);
 }
 
 nlohmann::json Station::forget_sphere(const std::string& name) {
   const fs::path stack = existing_stack(name);
   const fs::path marker = options_.data / ".station" / "spheres" / (name + ".json");
-  if (!fs::exists(marker)) throw Refused(409, fmt::format("stacks/{}: no outline was drawn here", name));
+  if (!drawn_here(stack, marker))
+    throw Refused(
+        409, fmt::format("stacks/{}: no outline drawn here (its mask.png, if any, is left as it is)", name));
   fs::remove(stack / "mask.png");
   fs::remove(marker);
   return sphere(name);
 }
 
-nlohmann::json Station::start_test_sequence() {
-  return start_job("test-sequence", nlohmann::json::object(),
-                   [this](StationJob& job) { return test_sequence_work(job); });
+nlohmann::json Station::start_test_sequence(const TestSequenceRequest& request) {
+  for (const Led& led : rig_.leds) {
+    if (led.limits.max_on_us > 0 && request.on_us > led.limits.max_on_us)
+      throw Refused(400, fmt::format("test-sequence.on_us: {} us is longer than LED {} may stay on ({} us)",
+                                     request.on_us, led.id, led.limits.max_on_us));
+  }
+  return start_job("test-sequence", {{"on_us", request.on_us}}, true,
+                   [this, request](StationJob& job) { return test_sequence_work(job, request); });
 }
 
-nlohmann::json Station::test_sequence_work(StationJob& job) {
+nlohmann::json Station::test_sequence_work(StationJob& job, const TestSequenceRequest& request) {
   const std::lock_guard lock(dome_mutex_);
   try {
-    ControllerClient& controller = *dome().controller;
+    const auto connection = dome();
+    ControllerClient& controller = *connection->controller;
     const std::vector<std::uint32_t> ids = led_ids(controller.info());
     job.progress(0, ids.size(), "LEDs");
+    if (job.stop_requested()) throw JobStopped("the test sequence was stopped before it started");
+    OneLedPerStepOptions steps_options;
+    steps_options.exposure_us = request.on_us;
     std::size_t steps = 0;
-    const SequenceRun run = controller.run_sequence(one_led_per_step(ids, OneLedPerStepOptions{}, 1),
-                                                    [&](const proto::StepEvent& step) {
-                                                      std::vector<std::pair<std::uint32_t, float>> lit;
-                                                      for (const std::uint32_t id : step.led_ids())
-                                                        lit.emplace_back(id, 1.0f);
-                                                      set_lit(std::move(lit), false);
-                                                      job.progress(++steps, ids.size(), "LEDs");
-                                                    });
+    const SequenceRun run =
+        controller.run_sequence(one_led_per_step(ids, steps_options, 1), [&](const proto::StepEvent& step) {
+          std::vector<std::pair<std::uint32_t, float>> lit;
+          for (const std::uint32_t id : step.led_ids()) lit.emplace_back(id, 1.0f);
+          set_lit(std::move(lit), false);
+          job.progress(++steps, ids.size(), "LEDs");
+        });
     set_lit({}, false);
     const LatenessStats lateness = lateness_stats(run.steps);
+    if (job.stop_requested() && run.done.outcome() == proto::ABORTED_BY_HOST)
+      throw JobStopped(
+          fmt::format("the test sequence was stopped after {} of {} LEDs", run.steps.size(), ids.size()));
     if (!run.ok())
       throw Error(fmt::format("the test sequence ended early: {} {}", proto::Outcome_Name(run.done.outcome()),
                               run.done.detail()));
@@ -454,6 +539,8 @@ nlohmann::json Station::test_sequence_work(StationJob& job) {
               {"max", lateness.max_ns / 1e3}}}};
   } catch (const ControllerError&) {
     set_lit({}, false);
+    throw;
+  } catch (const JobStopped&) {
     throw;
   } catch (const std::exception& e) {
     drop_dome(e.what());
@@ -474,7 +561,7 @@ nlohmann::json Station::start_capture(const CaptureRequest& request) {
   // The request is kept so that a resume (after a stop, a crash, a lost link) repeats it exactly.
   write_json_atomically(options_.data / ".station" / "captures" / (request.name + ".json"),
                         request.to_json());
-  return start_job("capture", request.to_json(),
+  return start_job("capture", request.to_json(), true,
                    [this, request](StationJob& job) { return capture_work(job, request, false); });
 }
 
@@ -486,7 +573,7 @@ nlohmann::json Station::resume_capture(const std::string& name) {
   const CaptureRequest request = capture_request(asked);
   nlohmann::json shown = request.to_json();
   shown["resume"] = true;
-  return start_job("capture", shown,
+  return start_job("capture", shown, true,
                    [this, request](StationJob& job) { return capture_work(job, request, true); });
 }
 
@@ -511,8 +598,8 @@ nlohmann::json Station::capture_work(StationJob& job, const CaptureRequest& requ
   job.say(resume ? "resuming" : "capturing");
   const std::lock_guard lock(dome_mutex_);
   try {
-    auto& connection = dome();
-    const CaptureReport report = capture_stack(rig_, *connection.controller, *connection.camera, options);
+    const auto connection = dome();
+    const CaptureReport report = capture_stack(rig_, *connection->controller, *connection->camera, options);
     set_lit({}, false);
     nlohmann::json result = report.to_json();
     result["stack"] = request.name;
@@ -522,10 +609,10 @@ nlohmann::json Station::capture_work(StationJob& job, const CaptureRequest& requ
     throw;
   } catch (const CaptureStopped& e) {
     set_lit({}, false);
-    if (!abort_) throw;
+    if (!abort_) throw JobStopped(e.what());
     // Aborted: the frames stay on disk, the plan goes (the page offers no resume).
     fs::remove(options_.data / ".station" / "captures" / (request.name + ".json"));
-    throw CaptureStopped(
+    throw JobStopped(
         fmt::format("the capture was aborted; the frames taken are kept in stacks/{}", request.name));
   } catch (const std::exception& e) {
     drop_dome(e.what());
@@ -540,7 +627,7 @@ nlohmann::json Station::start_calibration(const CalibrationRequest& request) {
   }
   if (fs::exists(folder("calibrations", request.name)))
     throw Refused(409, fmt::format("calibrations/{} exists: choose another name", request.name));
-  return start_job("calibration", request.to_json(),
+  return start_job("calibration", request.to_json(), false,
                    [this, request](StationJob& job) { return calibration_work(job, request); });
 }
 
@@ -577,7 +664,7 @@ nlohmann::json Station::start_solve(const SolveRequest& request) {
     if (fs::exists(folder(kind, request.name)))
       throw Refused(409, fmt::format("{}/{} exists: choose another name", kind, request.name));
   }
-  return start_job("solve", request.to_json(),
+  return start_job("solve", request.to_json(), true,
                    [this, request](StationJob& job) { return solve_work(job, request); });
 }
 
@@ -590,7 +677,8 @@ nlohmann::json Station::start_export(const std::string& result, const std::strin
   const fs::path out = options_.data / "exports" / (result + (format == "ptm" ? ".ptm" : ".rti"));
   if (fs::exists(out)) throw Refused(409, fmt::format("exports/{} exists", out.filename().string()));
   return start_job(
-      "export", {{"result", result}, {"format", format}}, [this, result, format, out](StationJob& job) {
+      "export", {{"result", result}, {"format", format}}, false,
+      [this, result, format, out](StationJob& job) {
         pipeline::ExportSettings settings;
         settings.input = folder("results", result);
         settings.out = out;
@@ -603,6 +691,23 @@ nlohmann::json Station::start_export(const std::string& result, const std::strin
 }
 
 nlohmann::json Station::solve_work(StationJob& job, const SolveRequest& request) {
+  const fs::path out = folder("results", request.name);
+  const fs::path surface = folder("surfaces", request.name);
+  try {
+    return solve_stages(job, request);
+  } catch (const JobStopped&) {
+    // Half a result is no result: the folders this solve wrote go (their names were free before it).
+    std::error_code ignored;
+    fs::remove_all(out, ignored);
+    fs::remove_all(surface, ignored);
+    throw;
+  }
+}
+
+nlohmann::json Station::solve_stages(StationJob& job, const SolveRequest& request) {
+  const auto stop_point = [&job] {
+    if (job.stop_requested()) throw JobStopped("the solve was stopped; its partial result is removed");
+  };
   const fs::path stack = folder("stacks", request.stack);
   const fs::path out = folder("results", request.name);
   pipeline::SolveSettings settings;
@@ -612,22 +717,28 @@ nlohmann::json Station::solve_work(StationJob& job, const SolveRequest& request)
   if (!request.calibration.empty())
     calibration.file = folder("calibrations", request.calibration) / "calibration.json";
   job.say("solving");
-  const pipeline::SolveReport solved =
-      pipeline::solve_folder(stack, settings, out, calibration, [&job](const pipeline::SolveWork& work) {
+  const pipeline::SolveReport solved = pipeline::solve_folder(
+      stack, settings, out, calibration, [&job, stop_point](const pipeline::SolveWork& work) {
         auto done = std::make_shared<std::atomic<std::size_t>>(0);
         job.progress(0, work.total, work.unit);
-        return SolveProgress(
-            [&job, done, work](std::size_t items) { job.progress(*done += items, work.total, work.unit); });
+        // Called from the solver's workers: a stop ends the solve there (its threads pass the error on).
+        return SolveProgress([&job, done, work, stop_point](std::size_t items) {
+          stop_point();
+          job.progress(*done += items, work.total, work.unit);
+        });
       });
+  stop_point();
   job.say("integrating the surface");
   pipeline::IntegrateSettings integrate;
   integrate.input = out.string();
   const fs::path surface = folder("surfaces", request.name);
   integrate.out = surface.string();
+  stop_point();
   // Orthographic: the rig camera's pixel at the object, scaled to the stack's width.
   const int width = solved.summary.value("width", rig_.camera.width);
   integrate.pixel_mm = rig_.camera.pixel_pitch_mm * rig_.camera.width / std::max(1, width);
   pipeline::integrate_folder(integrate);
+  stop_point();
   job.say("writing the report");
   report::ReportOptions report_options;
   report_options.stack = stack;

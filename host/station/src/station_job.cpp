@@ -23,18 +23,19 @@ const char* state_name(StationJob::State state) {
   return "unknown";
 }
 
-StationJob::StationJob(int id, std::string kind, nlohmann::json request, Work work, OnEnd on_end)
-    : id_(id), kind_(std::move(kind)), request_(std::move(request)), on_end_(std::move(on_end)) {
+StationJob::StationJob(int id, std::string kind, nlohmann::json request, bool stoppable, Work work)
+    : id_(id), kind_(std::move(kind)), request_(std::move(request)), stoppable_(stoppable) {
   thread_ = std::thread([this, work = std::move(work)] { run(work); });
 }
 
 StationJob::~StationJob() {
   request_stop();
-  wait();
+  if (thread_.joinable()) thread_.join();
 }
 
-void StationJob::wait() {
-  if (thread_.joinable() && thread_.get_id() != std::this_thread::get_id()) thread_.join();
+void StationJob::wait() const {
+  std::unique_lock lock(mutex_);
+  ended_changed_.wait(lock, [this] { return state_ != State::kRunning; });
 }
 
 void StationJob::run(const Work& work) {
@@ -43,11 +44,14 @@ void StationJob::run(const Work& work) {
   std::string error;
   try {
     result = work(*this);
+  } catch (const JobStopped& e) {
+    ended = State::kStopped;
+    error = e.what();
   } catch (const std::exception& e) {
-    // A stop asked for ends the work with an error at its safe point: that is a stop, not a failure.
-    ended = stop_ ? State::kStopped : State::kFailed;
+    ended = State::kFailed;
     error = e.what();
   }
+  if (ended == State::kFailed) logger("station")->warn("{} failed: {}", kind_, error);
   {
     const std::lock_guard lock(mutex_);
     state_ = ended;
@@ -55,8 +59,7 @@ void StationJob::run(const Work& work) {
     error_ = std::move(error);
     ended_ = Clock::now();
   }
-  if (ended == State::kFailed) logger("station")->warn("{} failed: {}", kind_, error_);
-  if (on_end_) on_end_(*this);
+  ended_changed_.notify_all();
 }
 
 void StationJob::progress(std::size_t done, std::size_t total, const std::string& unit) {
@@ -82,9 +85,9 @@ nlohmann::json StationJob::to_json() const {
   const Clock::time_point end = state_ == State::kRunning ? Clock::now() : ended_;
   const double seconds = std::chrono::duration<double>(end - started_).count();
   nlohmann::json j = {
-      {"id", id_},          {"kind", kind_},   {"request", request_}, {"state", state_name(state_)},
-      {"done", done_},      {"total", total_}, {"unit", unit_},       {"seconds", seconds},
-      {"message", message_}};
+      {"id", id_},           {"kind", kind_},          {"request", request_}, {"state", state_name(state_)},
+      {"done", done_},       {"total", total_},        {"unit", unit_},       {"seconds", seconds},
+      {"message", message_}, {"stoppable", stoppable_}};
   // Time left at the pace so far (unknown until some work is done).
   if (state_ == State::kRunning && baseline_ && done_ > *baseline_ && total_ >= done_)
     j["eta_seconds"] =

@@ -89,6 +89,14 @@ PreviewRequest preview_request(const nlohmann::json& body) {
   return request;
 }
 
+TestSequenceRequest test_sequence_request(const nlohmann::json& body) {
+  only_fields(body, {"on_us"}, "test-sequence");
+  TestSequenceRequest request;
+  if (body.contains("on_us"))
+    request.on_us = static_cast<std::uint32_t>(integer(body["on_us"], "test-sequence.on_us", 100, 2'000'000));
+  return request;
+}
+
 CaptureRequest capture_request(const nlohmann::json& body) {
   only_fields(body, {"name", "target", "exposure_us", "dark_frames", "bracket_stops", "led_ids"}, "capture");
   if (!body.contains("name")) bad("capture: missing field 'name' (the stack's folder name)");

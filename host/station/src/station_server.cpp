@@ -9,6 +9,8 @@
 
 #include <fstream>
 #include <map>
+#include <optional>
+#include <thread>
 
 namespace lightstage::station {
 
@@ -55,8 +57,13 @@ const char* content_type(const fs::path& file) {
   return found == types.end() ? "application/octet-stream" : found->second;
 }
 
-// The file under `root` that `relative` names, or nothing when it leaves root or is not a file.
+// The file under `root` that `relative` names, or nothing when it leaves root,
+// names a hidden file or folder (a solve's spill, a partial write) or is not a file.
 std::optional<fs::path> contained_file(const fs::path& root, const std::string& relative) {
+  for (const auto& part : fs::path(relative)) {
+    const std::string name = part.string();
+    if (name.empty() || name.front() == '.' || part.is_absolute()) return std::nullopt;
+  }
   std::error_code error;
   const fs::path base = fs::canonical(root, error);
   if (error) return std::nullopt;
@@ -65,6 +72,15 @@ std::optional<fs::path> contained_file(const fs::path& root, const std::string& 
   const auto [end, _] = std::mismatch(base.begin(), base.end(), file.begin(), file.end());
   if (end != base.end() || !fs::is_regular_file(file)) return std::nullopt;
   return file;
+}
+
+// The host a request was sent to, without its port ("[::1]:8080" -> "::1").
+std::string host_name(const std::string& host_header) {
+  if (!host_header.empty() && host_header.front() == '[') {
+    const auto close = host_header.find(']');
+    return close == std::string::npos ? host_header : host_header.substr(1, close - 1);
+  }
+  return host_header.substr(0, host_header.find(':'));
 }
 
 }  // namespace
@@ -106,9 +122,19 @@ int StationServer::bind() {
   return port_;
 }
 
-void StationServer::run() { server_->listen_after_bind(); }
+void StationServer::run() {
+  running_ = true;
+  if (!stop_asked_) server_->listen_after_bind();
+  running_ = false;
+}
 
-void StationServer::stop() { server_->stop(); }
+// httplib's stop() does nothing until the server listens: a stop asked for
+// before that (a signal right at start) waits for it, or keeps run() from listening.
+void StationServer::stop() {
+  stop_asked_ = true;
+  while (running_ && !server_->is_running()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  server_->stop();
+}
 
 std::string StationServer::url() const {
   const std::string host =
@@ -120,18 +146,44 @@ std::string StationServer::url() const {
 
 // An operator who lit LEDs by hand and went away (a closed tab, a lost
 // network) leaves them lit no longer than the lease.
+// Tried again every tick until the dome is dark; the log says the first try and how it ended.
 void StationServer::watch_leases() {
   std::unique_lock lock(watch_mutex_);
+  bool darkening = false;
+  std::string last_outcome;
   while (!watch_changed_.wait_for(lock, std::chrono::milliseconds(250), [this] { return stopping_; })) {
-    if (!access_.lapsed(Clock::now()) || !station_.lit_by_hand()) continue;
+    if (access_.lapsed(Clock::now())) darkening = true;
+    if (!darkening) continue;
+    if (!station_.lit_by_hand()) {
+      darkening = false;
+      last_outcome.clear();
+      continue;
+    }
     AuditEntry entry{"", "station", "", "dark", {{"why", "the operator's lease lapsed"}}, "ok"};
     try {
       station_.dark();
     } catch (const std::exception& e) {
-      entry.outcome = fmt::format("failed: {}", e.what());
+      entry.outcome = fmt::format("failed (tried again): {}", e.what());
+      logger("station")->warn("could not darken the LEDs of an operator who went away: {}", e.what());
     }
-    audit_.record(entry);
+    if (entry.outcome != last_outcome) audit_.record(entry);
+    last_outcome = entry.outcome;
   }
+}
+
+// The page's origin: on loopback, a request must name a loopback host, so a
+// page elsewhere cannot reach the station through a name that resolves to
+// 127.0.0.1 (DNS rebinding); off loopback the token guards it. Actions must
+// carry the client id, a header no cross-site form can set.
+std::optional<std::string> StationServer::refusal(const httplib::Request& request) const {
+  if (is_loopback_address(options_.host) && request.has_header("Host")) {
+    const std::string host = host_name(request.get_header_value("Host"));
+    if (!is_loopback_address(host) && host != options_.host)
+      return fmt::format("this station answers on loopback only, not to the host '{}'", host);
+  }
+  if (request.method == "POST" && client_of(request).empty())
+    return "actions need the page's client id (header X-Lightstage-Client)";
+  return std::nullopt;
 }
 
 void StationServer::check_token(const httplib::Request& request) const {
@@ -184,6 +236,9 @@ void StationServer::action(const std::string& pattern, const std::string& name, 
       entry.outcome = fmt::format("failed: {}", e.what());
       answer_error(response, 500, e.what());
     }
+    // Requests without the token are not the station's operators: they are
+    // refused, not recorded (the log cannot be filled by whoever reaches the port).
+    if (response.status == 401) return;
     entry.name = access_.name_of(client);
     audit_.record(entry);
   });
@@ -201,6 +256,12 @@ void StationServer::routes() {
         }
         answer_error(response, 500, message);
       });
+  server_->set_pre_routing_handler([this](const httplib::Request& request, httplib::Response& response) {
+    const auto refused = refusal(request);
+    if (!refused) return httplib::Server::HandlerResponse::Unhandled;
+    answer_error(response, 403, *refused);
+    return httplib::Server::HandlerResponse::Handled;
+  });
   // httplib's own refusals (no route, body too large, bad request line) as JSON too.
   server_->set_error_handler([](const httplib::Request& request, httplib::Response& response) {
     if (!response.body.empty()) return;
@@ -263,7 +324,7 @@ void StationServer::routes() {
     });
   });
   action("/api/test-sequence", "test-sequence", true,
-         [this](const Call&) { return station_.start_test_sequence(); });
+         [this](const Call& call) { return station_.start_test_sequence(test_sequence_request(call.body)); });
   action("/api/capture", "capture.start", true,
          [this](const Call& call) { return station_.start_capture(capture_request(call.body)); });
   action("/api/capture/resume", "capture.resume", true, [this](const Call& call) {
@@ -307,10 +368,11 @@ void StationServer::routes() {
     return station_.job_json();
   });
 
-  server_->Get(R"(/files/((stacks|calibrations|results|surfaces|exports)/.+))",
+  server_->Get(R"(/files/((stacks|calibrations|results|surfaces|exports)/(.+)))",
                [this](const httplib::Request& request, httplib::Response& response) {
                  guarded(request, response, [&] {
-                   const auto file = contained_file(station_.data(), request.matches[1].str());
+                   const auto file =
+                       contained_file(station_.data() / request.matches[2].str(), request.matches[3].str());
                    if (!file) throw Refused(404, fmt::format("no file {}", request.matches[1].str()));
                    const auto size = static_cast<std::size_t>(fs::file_size(*file));
                    auto in = std::make_shared<std::ifstream>(*file, std::ios::binary);

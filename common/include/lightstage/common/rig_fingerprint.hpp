@@ -9,6 +9,7 @@
 #include "lightstage/common/rig.hpp"
 
 #include <string>
+#include <string_view>
 
 namespace lightstage {
 
@@ -18,5 +19,9 @@ std::string canonical_rig_text(const Rig& rig);
 // 16 hex digits (64-bit FNV-1a of canonical_rig_text): not a defence against
 // forgery, a guard against a host and a controller holding different files.
 std::string rig_fingerprint(const Rig& rig);
+
+// 16 hex digits (64-bit FNV-1a) of any bytes: whether a file is still the one
+// a program wrote, not a defence against forgery.
+std::string content_hash(std::string_view bytes);
 
 }  // namespace lightstage

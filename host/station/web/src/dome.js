@@ -1,6 +1,7 @@
 // The dome: the LED map live, the controller's state and faults, a test
 // sequence, and single LEDs lit by hand (within the firmware's limits: it
 // switches an LED off itself after its on-time limit, and says so).
+import { useRef, useState } from 'preact/hooks';
 import { post } from './api.js';
 import { html } from './html.js';
 import { LedMap, litSet } from './led_map.js';
@@ -11,11 +12,21 @@ export function DomePanel({ station }) {
   const controller = status.dome.controller;
   const lit = litSet(status);
   const busy = status.job?.state === 'running';
+  const [slow, setSlow] = useState(false);
+  // What this page last asked for: two clicks quicker than the status poll
+  // build on each other, not on the older status.
+  const asked = useRef(null);
   const toggle = (id) => {
-    const next = new Set(status.dome.controller?.leds_on ?? []);
+    const recent = asked.current && Date.now() - asked.current.at < 2000;
+    const next = new Set(recent ? asked.current.leds : status.dome.controller?.leds_on ?? []);
     if (next.has(id)) next.delete(id);
     else next.add(id);
+    asked.current = { leds: next, at: Date.now() };
     act(() => post('/api/leds', { leds: [...next].map((led) => ({ id: led })) }));
+  };
+  const dark = () => {
+    asked.current = { leds: new Set(), at: Date.now() };
+    act(() => post('/api/dark'));
   };
   return html`<section class="panel dome">
     <div>
@@ -38,9 +49,14 @@ export function DomePanel({ station }) {
         : html`<p class="fault">Not connected: ${status.dome.error}</p>`}
       <p>
         <button id="test-sequence" disabled=${!operator || busy}
-          onClick=${() => act(() => post('/api/test-sequence'))}>Run the test sequence</button>
-        <button disabled=${!operator || busy} onClick=${() => act(() => post('/api/leds', { leds: [] }))}>
-          Put every LED out</button>
+          onClick=${() => act(() => post('/api/test-sequence', { on_us: slow ? 250000 : 10000 }))}>
+          Run the test sequence</button>
+        <label><input type="checkbox" id="test-slow" checked=${slow}
+          onChange=${(e) => setSlow(e.target.checked)} /> slowly, to watch each LED</label>
+      </p>
+      <p>
+        <button id="dark" onClick=${dark}
+          title="Anyone may darken the dome, in control or not">Put every LED out</button>
       </p>
       ${status.job?.kind === 'test-sequence' && status.job.result && html`<p id="test-result">
         ${status.job.result.steps} steps; lateness median ${status.job.result.lateness_us.median.toFixed(1)} µs,

@@ -54,7 +54,7 @@ function JobBar({ job, operator, act }) {
     ${running && job.eta_seconds !== null && html`<span class="eta">${formatSeconds(job.eta_seconds)} left</span>`}
     ${running && job.message && html`<span class="job-message">${job.message}</span>`}
     ${job.error && html`<span class="job-error">${job.error}</span>`}
-    ${running && operator && html`<span class="job-actions">
+    ${running && operator && job.stoppable && html`<span class="job-actions">
       <button id="job-stop" onClick=${() => act(() => post('/api/job/stop'))}>
         ${job.kind === 'capture' ? 'Pause' : 'Stop'}</button>
       ${job.kind === 'capture' &&

@@ -123,6 +123,8 @@ class CaptureRunner {
   long double clock_offset_sum_ = 0, clock_offset_files_ = 0;
   bool closed_loop_ = false;
   bool hardware_ = false;
+  // Within an HDR group: a stop waits for the group's last exposure, so its brackets are not lost.
+  bool mid_group_ = false;
   double gain_ = 1;
   double asked_exposure_us_ = 0;
   double current_exposure_us_ = 0;  // what the camera said it applied

@@ -8,11 +8,13 @@
 // requests a resume repeats, the simulated dome's logs). Nothing already in a folder is overwritten: a name
 // in use is refused.
 //
-// The dome: one thread at a time talks to the controller. A job that needs
-// it (capture, test sequence) holds it until it ends; LEDs lit by hand are
-// refused meanwhile. The controller's watchdog darkens the dome whenever this
-// process stops feeding it (killed, hung), and the station darkens it when
-// the operator who lit LEDs by hand goes away.
+// The dome: one thread at a time works with the controller and camera. A job
+// that needs them (capture, test sequence) holds them until it ends; LEDs lit
+// by hand are refused meanwhile. Darkening never waits for that: it goes to
+// the controller at once (its protocol takes requests from any thread). The
+// controller's watchdog darkens the dome whenever this process stops feeding
+// it (killed, hung), and the station darkens it when the operator who lit
+// LEDs by hand goes away.
 
 #include "lightstage/pipeline/dome_connection.hpp"
 #include "lightstage/station/simulated_bench.hpp"
@@ -63,7 +65,10 @@ class Station {
   std::vector<std::string> methods() const;
 
   void set_leds(const LedsRequest& request);  // Refused(409) while a job holds the dome
-  void dark();                                // every LED off, whatever runs
+  // Every LED off, whatever runs: a test sequence is aborted, a capture stops
+  // after its current controller sequence (which ends dark). Throws when the
+  // controller cannot be told (its watchdog darkens a dome nobody feeds).
+  void dark();
   bool lit_by_hand() const;
   Preview preview(const PreviewRequest& request);
   void place(const std::string& what);  // simulated only: the object or a chrome sphere position
@@ -80,7 +85,7 @@ class Station {
   // Removes the outline drawn here (the calibration then detects the sphere again).
   nlohmann::json forget_sphere(const std::string& stack);
 
-  nlohmann::json start_test_sequence();
+  nlohmann::json start_test_sequence(const TestSequenceRequest& request);
   nlohmann::json start_capture(const CaptureRequest& request);
   nlohmann::json resume_capture(const std::string& name);
   nlohmann::json start_calibration(const CalibrationRequest& request);
@@ -88,7 +93,9 @@ class Station {
   // An RTI file of a result's stack, exports/RESULT.ptm (PTM) or .rti (HSH), for RTIViewer and the like.
   nlohmann::json start_export(const std::string& result, const std::string& format);
   // Asks the running job to stop at its next safe point (a capture keeps its
-  // frames). An abort also forgets a capture's plan: it is not resumed.
+  // frames, a solve's partial folders go). An abort also forgets a capture's
+  // plan: it is not resumed. Refused(409) for calibrations and exports, which
+  // end by themselves.
   void stop_job(bool abort = false);
   nlohmann::json job_json() const;
   // Waits for the job to end (tests, shutdown).
@@ -97,15 +104,17 @@ class Station {
  private:
   using Work = StationJob::Work;
   // Starts `work` as the job; Refused(409) while another runs.
-  nlohmann::json start_job(const std::string& kind, nlohmann::json request, Work work);
+  nlohmann::json start_job(const std::string& kind, nlohmann::json request, bool stoppable, Work work);
   // The connected dome (connecting when needed); dome_mutex_ held by the caller.
-  pipeline::DomeConnection& dome();
-  void drop_dome(const std::string& why);  // after a failure: reconnect next time
-  bool may_reconnect();                    // dome_mutex_ held
+  std::shared_ptr<pipeline::DomeConnection> dome();
+  std::shared_ptr<pipeline::DomeConnection> connected() const;  // or null; any thread
+  void drop_dome(const std::string& why);                       // after a failure: reconnect next time
+  bool may_reconnect();                                         // dome_mutex_ held
   nlohmann::json capture_work(StationJob& job, const CaptureRequest& request, bool resume);
   nlohmann::json calibration_work(StationJob& job, const CalibrationRequest& request);
   nlohmann::json solve_work(StationJob& job, const SolveRequest& request);
-  nlohmann::json test_sequence_work(StationJob& job);
+  nlohmann::json solve_stages(StationJob& job, const SolveRequest& request);
+  nlohmann::json test_sequence_work(StationJob& job, const TestSequenceRequest& request);
   void set_lit(std::vector<std::pair<std::uint32_t, float>> lit, bool by_hand);
   std::filesystem::path folder(const char* kind, const std::string& name) const;
   std::filesystem::path existing_stack(const std::string& name) const;  // Refused(404) when there is none
@@ -114,8 +123,9 @@ class Station {
   Rig rig_;
   std::unique_ptr<SimulatedBench> bench_;
 
-  std::mutex dome_mutex_;  // the controller and camera: one user at a time
-  std::optional<pipeline::DomeConnection> dome_;
+  std::mutex dome_mutex_;          // the controller and camera: one user at a time
+  mutable std::mutex link_mutex_;  // dome_ itself (dark() reads it without dome_mutex_)
+  std::shared_ptr<pipeline::DomeConnection> dome_;
   std::chrono::steady_clock::time_point last_connect_attempt_{};
 
   mutable std::mutex state_mutex_;  // what status() reports
@@ -126,7 +136,7 @@ class Station {
 
   mutable std::mutex job_mutex_;
   int next_job_id_ = 1;
-  std::unique_ptr<StationJob> job_;
+  std::shared_ptr<StationJob> job_;
   std::atomic<bool> abort_{false};  // the running job was aborted, not paused
 };
 

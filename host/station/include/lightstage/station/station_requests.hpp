@@ -27,6 +27,12 @@ struct PreviewRequest {
   std::optional<double> gain;
 };
 
+// The test sequence: every LED alone in turn, each lit this long (slow
+// enough to watch each one, or fast to check the timing).
+struct TestSequenceRequest {
+  std::uint32_t on_us = 10'000;
+};
+
 struct CaptureRequest {
   std::string name;                   // DATA/stacks/NAME
   std::optional<double> exposure_us;  // unset = automatic per LED
@@ -63,6 +69,7 @@ struct SolveRequest {
 // Each throws Refused(400) naming the field at fault.
 LedsRequest leds_request(const nlohmann::json& body);
 PreviewRequest preview_request(const nlohmann::json& body);
+TestSequenceRequest test_sequence_request(const nlohmann::json& body);
 CaptureRequest capture_request(const nlohmann::json& body);
 CalibrationRequest calibration_request(const nlohmann::json& body);
 SphereCircle sphere_request(const nlohmann::json& body);

@@ -9,7 +9,12 @@
 // /files request (header "Authorization: Bearer T", or ?token=T for links);
 // the client id in "X-Lightstage-Client". Reads are open to every client with
 // the token; actions need control, but for POST /api/dark, which anyone may
-// send (darkening the dome is always safe). Every action goes to the audit log.
+// send (darkening the dome is always safe). Every action goes to the audit log
+// (but for requests without the token).
+//
+// Origin: on a loopback address the Host a request names must be loopback
+// too (no DNS rebinding), and every POST must carry the client id header (no
+// cross-site form posts); both refused with 403.
 
 #include "lightstage/station/audit_log.hpp"
 #include "lightstage/station/operator_access.hpp"
@@ -21,6 +26,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -74,6 +80,8 @@ class StationServer {
   void guarded(const httplib::Request& request, httplib::Response& response,
                const std::function<void()>& answer);
   void check_token(const httplib::Request& request) const;
+  // Why a request is refused before any route sees it (its Host, its client id), if it is.
+  std::optional<std::string> refusal(const httplib::Request& request) const;
 
   Station& station_;
   ServerOptions options_;
@@ -81,6 +89,7 @@ class StationServer {
   AuditLog audit_;
   std::unique_ptr<httplib::Server> server_;
   int port_ = 0;
+  std::atomic<bool> running_{false}, stop_asked_{false};
   std::mutex preview_mutex_;
   std::string preview_png_;  // the last live-view frame
 
