@@ -21,6 +21,7 @@ namespace lightstage::pipeline {
 void write_result_report(const std::filesystem::path& result_dir, const std::filesystem::path& input,
                          bool light_statistics) {
   const std::filesystem::path file = result_dir / "report.html";
+  return_free_memory();  // what the solve freed is the report's now
   try {
     report::ReportOptions options;
     options.stack = input;
