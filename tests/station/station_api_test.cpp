@@ -11,6 +11,11 @@
 
 #include <gtest/gtest.h>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <fstream>
 #include <thread>
 
@@ -31,14 +36,15 @@ struct Answer {
 // The simulated dome (64x64 sphere, no noise), the station and its server on a free port.
 class StationUnderTest {
  public:
-  explicit StationUnderTest(ServerOptions server_options = {}, const std::string& data_name = "data") {
+  explicit StationUnderTest(ServerOptions server_options = {}, const std::string& data_name = "data",
+                            int side = 64) {
     StationOptions options;
     options.rig = testing::source_dir() / "hw" / "rigs" / "sim-dome.yaml";
     options.data = testing::scratch_dir() / data_name;
     SimulatedBenchOptions bench;
     bench.scene = "sphere";
-    bench.width = 64;
-    bench.height = 64;
+    bench.width = side;
+    bench.height = side;
     bench.noise = "none";
     bench.programs = testing::bin_dir();
     options.simulated = bench;
@@ -210,6 +216,63 @@ TEST(StationApi, AStoppedCaptureKeepsItsFramesAndResumesFromThePage) {
   EXPECT_EQ(station.post("/api/capture/resume", json{{"name", "unknown"}}).status, 404);
 }
 
+TEST(StationApi, DarkPausesARunningCaptureAtOnceKeepingItsFrames) {
+  StationUnderTest station;
+  ASSERT_EQ(station.post("/api/control", json{{"name", "Ann"}}).status, 200);
+  ASSERT_EQ(station.post("/api/capture", kCapture).status, 200);
+  json job;
+  const auto deadline = std::chrono::steady_clock::now() + seconds(60);
+  do {
+    job = station.get("/api/job").body;
+    std::this_thread::sleep_for(milliseconds(5));
+  } while (job["state"] == "running" && job["done"].get<int>() < 10 &&
+           std::chrono::steady_clock::now() < deadline);
+  ASSERT_EQ(job["state"], "running") << job.dump();
+  ASSERT_EQ(station.post("/api/dark", json::object(), "tab-b").status, 200);
+  EXPECT_TRUE(station.get("/api/status").body["dome"]["controller"]["leds_on"].empty());
+  job = station.wait_job();
+  EXPECT_EQ(job["state"], "stopped") << job.dump();
+  const json stack = station.get("/api/data").body["stacks"][0];
+  EXPECT_GE(stack["frames"].get<int>(), 10);
+  EXPECT_LT(stack["frames"].get<int>(), 96);
+  EXPECT_TRUE(stack["resumable"].get<bool>());
+  EXPECT_TRUE(station.get("/api/status").body["dome"]["connected"].get<bool>()) << "darkening is no failure";
+  ASSERT_EQ(station.post("/api/capture/resume", json{{"name", "sphere"}}).status, 200);
+  job = station.wait_job();
+  ASSERT_EQ(job["state"], "done") << job.dump();
+  EXPECT_EQ(job["result"]["frames"], 96);
+}
+
+// A stop ends a solve mid-way (from its workers' progress) without taking
+// the station down, and leaves no half result behind.
+TEST(StationApi, AStoppedSolveLeavesNoHalfResult) {
+  StationUnderTest station({}, "data", 160);
+  ASSERT_EQ(station.post("/api/control", json{{"name", "Ann"}}).status, 200);
+  ASSERT_EQ(
+      station.post("/api/capture", json{{"name", "s"}, {"exposure_us", 4000}, {"dark_frames", 0}}).status,
+      200);
+  ASSERT_EQ(station.wait_job()["state"], "done");
+  ASSERT_EQ(station.post("/api/solve", json{{"stack", "s"}, {"method", "biquadratic"}, {"name", "r"}}).status,
+            200);
+  json job;
+  const auto deadline = std::chrono::steady_clock::now() + seconds(60);
+  do {
+    job = station.get("/api/job").body;
+    std::this_thread::sleep_for(milliseconds(2));
+  } while (job["state"] == "running" && job["done"].get<int>() == 0 &&
+           std::chrono::steady_clock::now() < deadline);
+  ASSERT_EQ(job["state"], "running") << "the solve ended before it could be stopped: " << job.dump();
+  ASSERT_EQ(station.post("/api/job/stop", json::object()).status, 200);
+  job = station.wait_job();
+  EXPECT_EQ(job["state"], "stopped") << job.dump();
+  EXPECT_FALSE(fs::exists(station.station().data() / "results" / "r"));
+  EXPECT_FALSE(fs::exists(station.station().data() / "surfaces" / "r"));
+  EXPECT_EQ(station.get("/api/status").status, 200);
+  // The name is free again.
+  ASSERT_EQ(station.post("/api/solve", json{{"stack", "s"}, {"method", "l2"}, {"name", "r"}}).status, 200);
+  EXPECT_EQ(station.wait_job()["state"], "done");
+}
+
 TEST(StationApi, TwoOperatorsTheSecondReadOnlyUntilTheFirstReleases) {
   StationUnderTest station;
   ASSERT_EQ(station.post("/api/control", json{{"name", "Ann"}}, "tab-a").status, 200);
@@ -288,6 +351,36 @@ TEST(StationApi, FilesStayInTheirFoldersAndActionsComeFromThePageOnLoopback) {
   ASSERT_TRUE(form);
   EXPECT_EQ(form->status, 403) << form->body;
   EXPECT_EQ(station.post("/api/dark", json::object(), "tab-b").status, 200);
+}
+
+// A request hidden in the body of a refused one must not be served.
+TEST(StationApi, ARefusedRequestsBodyIsNotTakenForAnotherRequest) {
+  StationUnderTest station;
+  const std::string hidden =
+      "POST /api/control HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Lightstage-Client: evil\r\n"
+      "Content-Type: application/json\r\nContent-Length: 15\r\n\r\n{\"name\":\"Eve\"}";
+  const std::string request =
+      "POST /api/control HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: text/plain\r\n"
+      "Content-Length: " +
+      std::to_string(hidden.size()) + "\r\n\r\n" + hidden;
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  ASSERT_GE(fd, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<std::uint16_t>(station.port()));
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address), 0);
+  ASSERT_EQ(::send(fd, request.data(), request.size(), 0), static_cast<ssize_t>(request.size()));
+  timeval timeout{1, 0};
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+  std::string answers;
+  char chunk[4096];
+  for (ssize_t n; (n = ::recv(fd, chunk, sizeof chunk, 0)) > 0;)
+    answers.append(chunk, static_cast<std::size_t>(n));
+  ::close(fd);
+  EXPECT_NE(answers.find("403"), std::string::npos) << answers;
+  EXPECT_EQ(answers.find("HTTP/1.1", 1), std::string::npos) << "a second answer:\n" << answers;
+  EXPECT_TRUE(station.get("/api/access").body["operator"].is_null()) << "the hidden request took control";
 }
 
 TEST(StationApi, DarkFromAnyTabCutsTheTestSequenceShort) {

@@ -98,10 +98,13 @@ void CaptureRunner::set_exposure(double exposure_us) {
   }
 }
 
+bool CaptureRunner::stop_asked() const {
+  return !mid_group_ && options_.stop_requested && options_.stop_requested();
+}
+
 Batch CaptureRunner::run_batch(const std::vector<Shot>& shots) {
   if (shots.empty()) return {};
-  if (!mid_group_ && options_.stop_requested && options_.stop_requested())
-    throw CaptureStopped("the capture was stopped as asked");
+  if (stop_asked()) throw CaptureStopped("the capture was stopped as asked");
   set_exposure(shots.front().exposure_us);
   Batch batch = hardware_ ? run_batch_once(shots) : run_software_batch(shots);
   for (int attempt = 0; attempt < options_.max_retakes && batch.taken.size() < shots.size(); ++attempt) {
@@ -284,6 +287,8 @@ Batch CaptureRunner::run_software_batch(const std::vector<Shot>& shots) {
   const auto timeout = std::chrono::milliseconds(static_cast<std::int64_t>(
       2000 + 3 * shots.front().exposure_us / 1000 + trigger_.arrival_timeout_us / 1000));
   for (std::size_t i = 0; i < shots.size(); ++i) {
+    // One LED at a time, lit from here: a stop (the dome darkened) must not light the next.
+    if (i > 0 && stop_asked()) throw BatchAborted("the capture was stopped as asked", std::move(batch));
     std::vector<std::pair<std::uint32_t, float>> leds;
     if (shots[i].led_id >= 0) leds.emplace_back(static_cast<std::uint32_t>(shots[i].led_id), 1.0f);
     controller_.set_leds(leds);
@@ -352,6 +357,7 @@ void CaptureRunner::take_frames(const CapturePlan& plan, const std::vector<bool>
           batch = run_counted(part);
         } catch (BatchAborted& aborted) {
           hand_on(aborted.partial);  // exposed before the abort: kept, not taken again
+          if (stop_asked()) throw CaptureStopped("the capture was stopped as asked");
           throw;
         }
         hand_on(batch);
@@ -373,6 +379,9 @@ void CaptureRunner::take_frames(const CapturePlan& plan, const std::vector<bool>
       for (const std::size_t i : group)
         exposures.insert(plan.frames[i].bracket.begin(), plan.frames[i].bracket.end());
       std::map<std::size_t, std::vector<Take>> takes_of;  // by frame index
+      // A stop is honoured here, between groups: within one it waits for the group's last exposure.
+      if (stop_asked()) throw CaptureStopped("the capture was stopped as asked");
+      mid_group_ = true;
       struct GroupEnd {
         bool& mid_group;
         ~GroupEnd() { mid_group = false; }
@@ -397,10 +406,11 @@ void CaptureRunner::take_frames(const CapturePlan& plan, const std::vector<bool>
           for (const std::size_t i : group) {
             if (takes_of[i].size() == plan.frames[i].bracket.size()) on_frame(i, takes_of[i]);
           }
+          mid_group_ = false;
+          if (stop_asked()) throw CaptureStopped("the capture was stopped as asked");
           throw;
         }
         add(batch);
-        mid_group_ = true;
       }
       for (const std::size_t i : group) on_frame(i, takes_of.at(i));
     }

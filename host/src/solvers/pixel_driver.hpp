@@ -32,18 +32,25 @@ using PixelCore = std::function<void(const PixelObservations&, std::size_t pixel
 
 // Counts one worker's pixels and hands them to a SolveProgress in batches (and
 // the rest when it goes out of scope), so workers rarely touch shared state.
+// A progress that throws (a solve stopped by its caller) ends the worker's
+// loop at tick(); the last report, from the destructor, is never thrown.
 class ProgressBatch {
  public:
   explicit ProgressBatch(const SolveProgress& progress) : progress_(progress) {}
-  ~ProgressBatch() { flush(); }
+  ~ProgressBatch() {
+    try {
+      flush();
+    } catch (...) {  // NOLINT(bugprone-empty-catch): the stop is seen at the caller's next step
+    }
+  }
   ProgressBatch(const ProgressBatch&) = delete;
   ProgressBatch& operator=(const ProgressBatch&) = delete;
   void tick() {
     if (progress_ && ++pending_ == kBatch) flush();
   }
   void flush() {
-    if (progress_ && pending_ > 0) progress_(pending_);
-    pending_ = 0;
+    const std::size_t done = std::exchange(pending_, 0);
+    if (progress_ && done > 0) progress_(done);
   }
 
  private:

@@ -93,10 +93,15 @@ Station::Station(StationOptions options) : options_(std::move(options)), rig_(lo
 }
 
 Station::~Station() {
+  bool sequence = false;
   {
     const std::lock_guard lock(job_mutex_);
-    if (job_ && job_->stoppable()) job_->request_stop();
+    if (job_ && job_->running() && job_->stoppable()) {
+      job_->request_stop();
+      sequence = job_->kind() == "test-sequence";
+    }
   }
+  if (sequence) abort_sequence();  // not the whole walk over the dome first
   wait_job();
   try {
     if (const auto connection = connected()) connection->controller->all_off();
@@ -134,11 +139,23 @@ bool Station::may_reconnect() {
   return true;
 }
 
+void Station::abort_sequence() {
+  try {
+    if (const auto connection = connected()) connection->controller->abort();
+  } catch (const ControllerError&) {
+    // Refused: no sequence runs.
+  }
+}
+
 void Station::drop_dome(const std::string& why) {
+  std::shared_ptr<pipeline::DomeConnection> dropped;
   {
     const std::lock_guard lock(link_mutex_);
-    dome_.reset();
+    dropped = std::move(dome_);
   }
+  // Its threads end here, outside the lock. With its heartbeats gone, the
+  // controller's watchdog darkens whatever it had lit.
+  dropped.reset();
   const std::lock_guard lock(state_mutex_);
   dome_error_ = why;
   controller_ = nullptr;
@@ -287,12 +304,11 @@ void Station::set_leds(const LedsRequest& request) {
 }
 
 void Station::dark() {
-  std::string sequence;  // the job running a controller sequence, if one does
   {
     const std::lock_guard lock(job_mutex_);
     if (job_ && job_->running() && (job_->kind() == "capture" || job_->kind() == "test-sequence")) {
+      darkened_ = true;  // its sequence is cut short below: that is a pause, not a failure
       job_->request_stop();
-      sequence = job_->kind();
     }
   }
   std::shared_ptr<pipeline::DomeConnection> connection = connected();
@@ -309,17 +325,21 @@ void Station::dark() {
   }
   ControllerClient& controller = *connection->controller;
   try {
-    // A capture's sequence is left to end (its frames are kept; it ends dark);
-    // the test sequence's long walk over every LED is cut short.
-    if (sequence == "test-sequence") controller.abort();
-    if (sequence != "capture") controller.all_off();
+    // Whatever sequence runs (a capture's, which keeps the frames it took and
+    // resumes; the test sequence; a preview's) ends now, dark.
+    try {
+      controller.abort();
+    } catch (const ControllerError&) {
+      // Refused: no sequence runs.
+    }
+    controller.all_off();
   } catch (const ControllerError& e) {
     throw Refused(409, fmt::format("the controller refused to darken: {}", e.what()));
   } catch (const std::exception& e) {
     drop_dome(e.what());
     throw;
   }
-  if (sequence != "capture") set_lit({}, false);
+  set_lit({}, false);
 }
 
 Preview Station::preview(const PreviewRequest& request) {
@@ -365,7 +385,8 @@ void Station::place(const std::string& what) {
     const std::lock_guard lock(job_mutex_);
     if (job_ && job_->running()) throw Refused(409, fmt::format("a {} is running", job_->kind()));
   }
-  const std::lock_guard lock(dome_mutex_);
+  const std::unique_lock lock(dome_mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) throw Refused(409, "the dome is busy: place the object when it is free");
   drop_dome("");
   bench_->place(what);
   try {
@@ -382,6 +403,7 @@ nlohmann::json Station::start_job(const std::string& kind, nlohmann::json reques
     throw Refused(409, fmt::format("a {} is running: stop it or wait for it to end", job_->kind()));
   job_.reset();  // the last one ended: its thread is joined
   abort_ = false;
+  darkened_ = false;
   job_ = std::make_shared<StationJob>(next_job_id_++, kind, std::move(request), stoppable, std::move(work));
   return job_->to_json();
 }
@@ -397,13 +419,8 @@ void Station::stop_job(bool abort) {
     job_->request_stop();
     kind = job_->kind();
   }
-  if (kind != "test-sequence") return;
   // Its one sequence walks every LED: cut short now, not at its end.
-  try {
-    if (const auto connection = connected()) connection->controller->abort();
-  } catch (const ControllerError&) {
-    // It ended meanwhile.
-  }
+  if (kind == "test-sequence") abort_sequence();
 }
 
 nlohmann::json Station::job_json() const {
@@ -477,11 +494,15 @@ nlohmann::json Station::set_sphere(const std::string& name, const SphereCircle& 
   const auto fixed = [](double v) { return static_cast<int>(std::lround(v * (1 << kShift))); };
   cv::circle(mask, cv::Point(fixed(circle.x_px - 0.5), fixed(circle.y_px - 0.5)), fixed(circle.radius_px),
              cv::Scalar(255), cv::FILLED, cv::LINE_8, kShift);
-  io::write_png(stack / "mask.png", mask);
+  // The marker first, then the mask renamed into place: a crash between them
+  // leaves no mask, never one that looks like the operator's own.
+  const fs::path drawing = stack / ".mask-drawn.png";
+  io::write_png(drawing, mask);
   write_json_atomically(marker, {{"x_px", circle.x_px},
                                  {"y_px", circle.y_px},
                                  {"radius_px", circle.radius_px},
-                                 {"mask_hash", content_hash(file_bytes(stack / "mask.png"))}});
+                                 {"mask_hash", content_hash(file_bytes(drawing))}});
+  fs::rename(drawing, stack / "mask.png");
   return sphere(name);
 }
 
@@ -517,8 +538,13 @@ nlohmann::json Station::test_sequence_work(StationJob& job, const TestSequenceRe
     OneLedPerStepOptions steps_options;
     steps_options.exposure_us = request.on_us;
     std::size_t steps = 0;
+    bool aborted = false;
     const SequenceRun run =
         controller.run_sequence(one_led_per_step(ids, steps_options, 1), [&](const proto::StepEvent& step) {
+          if (job.stop_requested() && !aborted) {  // a stop asked for before the run began
+            aborted = true;
+            controller.abort();
+          }
           std::vector<std::pair<std::uint32_t, float>> lit;
           for (const std::uint32_t id : step.led_ids()) lit.emplace_back(id, 1.0f);
           set_lit(std::move(lit), false);
@@ -615,6 +641,14 @@ nlohmann::json Station::capture_work(StationJob& job, const CaptureRequest& requ
     throw JobStopped(
         fmt::format("the capture was aborted; the frames taken are kept in stacks/{}", request.name));
   } catch (const std::exception& e) {
+    set_lit({}, false);
+    if (darkened_) {
+      // The operator darkened the dome mid-sequence: the frames exposed before are kept.
+      throw JobStopped(
+          fmt::format("the dome was darkened: the capture is paused, its frames kept in "
+                      "stacks/{} (resume completes it)",
+                      request.name));
+    }
     drop_dome(e.what());
     throw;
   }

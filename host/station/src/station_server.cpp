@@ -71,6 +71,10 @@ std::optional<fs::path> contained_file(const fs::path& root, const std::string& 
   if (error) return std::nullopt;
   const auto [end, _] = std::mismatch(base.begin(), base.end(), file.begin(), file.end());
   if (end != base.end() || !fs::is_regular_file(file)) return std::nullopt;
+  // What a link inside the folder leads to is held to the same rule.
+  for (const auto& part : file.lexically_relative(base)) {
+    if (part.string().front() == '.') return std::nullopt;
+  }
   return file;
 }
 
@@ -176,7 +180,8 @@ void StationServer::watch_leases() {
 // 127.0.0.1 (DNS rebinding); off loopback the token guards it. Actions must
 // carry the client id, a header no cross-site form can set.
 std::optional<std::string> StationServer::refusal(const httplib::Request& request) const {
-  if (is_loopback_address(options_.host) && request.has_header("Host")) {
+  if (is_loopback_address(options_.host)) {
+    if (!request.has_header("Host")) return "the request names no Host";
     const std::string host = host_name(request.get_header_value("Host"));
     if (!is_loopback_address(host) && host != options_.host)
       return fmt::format("this station answers on loopback only, not to the host '{}'", host);
@@ -196,6 +201,7 @@ void StationServer::check_token(const httplib::Request& request) const {
 void StationServer::guarded(const httplib::Request& request, httplib::Response& response,
                             const std::function<void()>& answer) {
   try {
+    if (const auto refused = refusal(request)) throw Refused(403, *refused);
     check_token(request);
     access_.touch(client_of(request), Clock::now());
     answer();
@@ -218,6 +224,13 @@ void StationServer::action(const std::string& pattern, const std::string& name, 
                                                           httplib::Response& response) {
     const std::string client = client_of(request);
     AuditEntry entry{client, "", request.remote_addr, name, nlohmann::json::object(), "ok"};
+    // Checked here, with the body read, not before routing: a body left unread
+    // on a kept-alive connection would be taken for the next request.
+    const auto refused = refusal(request);
+    if (refused) {
+      answer_error(response, 403, *refused);
+      return;  // not an operator's action: not recorded
+    }
     try {
       check_token(request);
       const nlohmann::json body = parse_body(request);
@@ -256,12 +269,6 @@ void StationServer::routes() {
         }
         answer_error(response, 500, message);
       });
-  server_->set_pre_routing_handler([this](const httplib::Request& request, httplib::Response& response) {
-    const auto refused = refusal(request);
-    if (!refused) return httplib::Server::HandlerResponse::Unhandled;
-    answer_error(response, 403, *refused);
-    return httplib::Server::HandlerResponse::Handled;
-  });
   // httplib's own refusals (no route, body too large, bad request line) as JSON too.
   server_->set_error_handler([](const httplib::Request& request, httplib::Response& response) {
     if (!response.body.empty()) return;

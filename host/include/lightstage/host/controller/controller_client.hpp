@@ -5,8 +5,10 @@
 // controller's unsolicited step events to whoever runs a sequence.
 //
 // Threads: a reader thread demultiplexes replies (by request id) from events;
-// a heartbeat thread sends a Heartbeat every `heartbeat_period`. Public calls
-// may come from any one thread at a time.
+// a heartbeat thread sends a Heartbeat every `heartbeat_period`. Requests may
+// come from several threads at once, each waiting for its own reply (an
+// abort() or all_off() from another thread ends a run_sequence() early); one
+// thread at a time runs a sequence, as its events go to that one caller.
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/link.hpp"

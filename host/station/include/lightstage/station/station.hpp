@@ -65,8 +65,8 @@ class Station {
   std::vector<std::string> methods() const;
 
   void set_leds(const LedsRequest& request);  // Refused(409) while a job holds the dome
-  // Every LED off, whatever runs: a test sequence is aborted, a capture stops
-  // after its current controller sequence (which ends dark). Throws when the
+  // Every LED off at once, whatever runs: the running sequence is aborted (a
+  // capture pauses keeping its frames, a test sequence stops). Throws when the
   // controller cannot be told (its watchdog darkens a dome nobody feeds).
   void dark();
   bool lit_by_hand() const;
@@ -109,7 +109,8 @@ class Station {
   std::shared_ptr<pipeline::DomeConnection> dome();
   std::shared_ptr<pipeline::DomeConnection> connected() const;  // or null; any thread
   void drop_dome(const std::string& why);                       // after a failure: reconnect next time
-  bool may_reconnect();                                         // dome_mutex_ held
+  void abort_sequence();  // the controller's running sequence, if any, ends dark
+  bool may_reconnect();   // dome_mutex_ held
   nlohmann::json capture_work(StationJob& job, const CaptureRequest& request, bool resume);
   nlohmann::json calibration_work(StationJob& job, const CalibrationRequest& request);
   nlohmann::json solve_work(StationJob& job, const SolveRequest& request);
@@ -137,7 +138,8 @@ class Station {
   mutable std::mutex job_mutex_;
   int next_job_id_ = 1;
   std::shared_ptr<StationJob> job_;
-  std::atomic<bool> abort_{false};  // the running job was aborted, not paused
+  std::atomic<bool> abort_{false};     // the running job was aborted, not paused
+  std::atomic<bool> darkened_{false};  // dark() cut the running job's sequence short
 };
 
 }  // namespace lightstage::station
