@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <csignal>
 #include <limits>
 #include <thread>
@@ -273,6 +274,36 @@ TEST(ControllerIntegration, LostStrobeAbortsTheStepWithLedsDark) {
   for (std::size_t k = failed.step() + 1; k < ids.size(); ++k) {
     EXPECT_TRUE(timeline.intervals(led_line(ids[k])).empty()) << "step " << k << " ran after the abort";
   }
+}
+
+// The station darkens the dome from another thread while a sequence runs:
+// the abort and the all-off get their own replies, the running sequence ends
+// ABORTED_BY_HOST with no step after it, and nothing is left lit.
+TEST(ControllerIntegration, AnAbortFromAnotherThreadEndsTheRunningSequence) {
+  SimulatedDome dome;
+  auto client = dome.connect();
+  OneLedPerStepOptions options;
+  options.exposure_us = 50'000;  // 96 steps of 50 ms: seconds left when the abort comes
+  std::vector<std::uint32_t> ids;
+  for (std::uint32_t id = 0; id < 96; ++id) ids.push_back(id);
+  std::atomic<int> seen{0};
+  std::thread darkener([&] {
+    while (seen < 2) std::this_thread::sleep_for(milliseconds(1));
+    client->abort();
+    client->all_off();
+  });
+  const SequenceRun run =
+      client->run_sequence(one_led_per_step(ids, options, 7), [&](const proto::StepEvent&) { ++seen; });
+  darkener.join();
+  EXPECT_EQ(run.done.outcome(), proto::ABORTED_BY_HOST) << run.done.detail();
+  EXPECT_GE(run.steps.size(), 2u);
+  EXPECT_LT(run.steps.size(), ids.size());
+  EXPECT_EQ(client->status().leds_on_size(), 0);
+  client.reset();
+  const Timeline timeline = dome.stop_and_read_timeline();
+  EXPECT_TRUE(timeline.leds_left_on().empty());
+  for (std::size_t k = run.steps.size() + 1; k < ids.size(); ++k)
+    EXPECT_TRUE(timeline.intervals(led_line(ids[k])).empty()) << "step " << k << " ran after the abort";
 }
 
 TEST(ControllerIntegration, MalformedFramesGetErrorsAndTheDaemonKeepsServing) {
