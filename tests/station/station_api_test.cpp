@@ -87,6 +87,17 @@ class StationUnderTest {
     ADD_FAILURE() << "the job did not end: " << job.dump();
     return job;
   }
+  // Polls the job until it has done at least `done` items (or ended); returns its last state.
+  json wait_progress(int done, std::chrono::milliseconds poll = milliseconds(5)) {
+    const auto deadline = std::chrono::steady_clock::now() + seconds(60);
+    json job;
+    do {
+      job = get("/api/job").body;
+      std::this_thread::sleep_for(poll);
+    } while (job["state"] == "running" && job["done"].get<int>() < done &&
+             std::chrono::steady_clock::now() < deadline);
+    return job;
+  }
   Station& station() { return *station_; }
   int port() const { return port_; }
 
@@ -189,13 +200,7 @@ TEST(StationApi, AStoppedCaptureKeepsItsFramesAndResumesFromThePage) {
   StationUnderTest station;
   ASSERT_EQ(station.post("/api/control", json{{"name", "Ann"}}).status, 200);
   ASSERT_EQ(station.post("/api/capture", kCapture).status, 200);
-  json job;
-  const auto deadline = std::chrono::steady_clock::now() + seconds(60);
-  do {
-    job = station.get("/api/job").body;
-    std::this_thread::sleep_for(milliseconds(5));
-  } while (job["state"] == "running" && job["done"].get<int>() < 20 &&
-           std::chrono::steady_clock::now() < deadline);
+  json job = station.wait_progress(20);
   ASSERT_EQ(station.post("/api/job/stop", json::object()).status, 200);
   job = station.wait_job();
   ASSERT_EQ(job["state"], "stopped") << job.dump();
@@ -220,13 +225,7 @@ TEST(StationApi, DarkPausesARunningCaptureAtOnceKeepingItsFrames) {
   StationUnderTest station;
   ASSERT_EQ(station.post("/api/control", json{{"name", "Ann"}}).status, 200);
   ASSERT_EQ(station.post("/api/capture", kCapture).status, 200);
-  json job;
-  const auto deadline = std::chrono::steady_clock::now() + seconds(60);
-  do {
-    job = station.get("/api/job").body;
-    std::this_thread::sleep_for(milliseconds(5));
-  } while (job["state"] == "running" && job["done"].get<int>() < 10 &&
-           std::chrono::steady_clock::now() < deadline);
+  json job = station.wait_progress(10);
   ASSERT_EQ(job["state"], "running") << job.dump();
   ASSERT_EQ(station.post("/api/dark", json::object(), "tab-b").status, 200);
   EXPECT_TRUE(station.get("/api/status").body["dome"]["controller"]["leds_on"].empty());
@@ -254,13 +253,7 @@ TEST(StationApi, AStoppedSolveLeavesNoHalfResult) {
   ASSERT_EQ(station.wait_job()["state"], "done");
   ASSERT_EQ(station.post("/api/solve", json{{"stack", "s"}, {"method", "biquadratic"}, {"name", "r"}}).status,
             200);
-  json job;
-  const auto deadline = std::chrono::steady_clock::now() + seconds(60);
-  do {
-    job = station.get("/api/job").body;
-    std::this_thread::sleep_for(milliseconds(2));
-  } while (job["state"] == "running" && job["done"].get<int>() == 0 &&
-           std::chrono::steady_clock::now() < deadline);
+  json job = station.wait_progress(1, milliseconds(2));
   ASSERT_EQ(job["state"], "running") << "the solve ended before it could be stopped: " << job.dump();
   ASSERT_EQ(station.post("/api/job/stop", json::object()).status, 200);
   job = station.wait_job();
@@ -390,13 +383,7 @@ TEST(StationApi, DarkFromAnyTabCutsTheTestSequenceShort) {
   EXPECT_EQ(station.post("/api/test-sequence", json{{"pace", 1}}).status, 400);
   // 96 LEDs lit 50 ms each: about 5 s to walk the dome.
   ASSERT_EQ(station.post("/api/test-sequence", json{{"on_us", 50'000}}).status, 200);
-  json job;
-  const auto deadline = std::chrono::steady_clock::now() + seconds(30);
-  do {
-    job = station.get("/api/job").body;
-    std::this_thread::sleep_for(milliseconds(5));
-  } while (job["state"] == "running" && job["done"].get<int>() < 3 &&
-           std::chrono::steady_clock::now() < deadline);
+  json job = station.wait_progress(3);
   ASSERT_EQ(job["state"], "running") << job.dump();
   // A viewer darkens the dome: the running job must not keep it lit.
   const Answer dark = station.post("/api/dark", json::object(), "tab-b");
@@ -508,13 +495,7 @@ TEST(StationApi, AnAbortedCaptureKeepsItsFramesButIsNotOfferedForResume) {
   StationUnderTest station;
   ASSERT_EQ(station.post("/api/control", json{{"name", "Ann"}}).status, 200);
   ASSERT_EQ(station.post("/api/capture", kCapture).status, 200);
-  json job;
-  const auto deadline = std::chrono::steady_clock::now() + seconds(60);
-  do {
-    job = station.get("/api/job").body;
-    std::this_thread::sleep_for(milliseconds(5));
-  } while (job["state"] == "running" && job["done"].get<int>() < 10 &&
-           std::chrono::steady_clock::now() < deadline);
+  json job = station.wait_progress(10);
   ASSERT_EQ(station.post("/api/job/abort", json::object()).status, 200);
   job = station.wait_job();
   ASSERT_EQ(job["state"], "stopped") << job.dump();
