@@ -84,6 +84,10 @@ void add_integrate(CLI::App& app) {
   sub->add_option("--mesh", args->mesh, "mesh files: ply, obj, both or none")
       ->check(CLI::IsMember({"ply", "obj", "both", "none"}))
       ->capture_default_str();
+  sub->add_option("--mesh-step", args->mesh_step,
+                  "one mesh vertex every N pixels each way; auto: every pixel, or as few as keep the mesh "
+                  "within 4 million vertices")
+      ->capture_default_str();
   add_output_flags(*sub, args->output, "surface.json plus out (the folder) and total_seconds");
   sub->callback([args, sub] {
     apply_output_flags(*sub, args->output);

@@ -71,6 +71,17 @@ TEST(Integrate, SolvedNormalsBecomeDepthAndMeshes) {
     hi = std::max(hi, v.x());
   }
   EXPECT_NEAR(hi - lo, 96.0, 4.0);
+  EXPECT_EQ(summary["mesh"]["step"], 1) << "a small surface is meshed whole";
+
+  // A vertex every second pixel each way: about a quarter of them, the same extent.
+  run = run_lightstage({"integrate", "--input", (dir / "result").string(), "--mask",
+                        (dir / "stack/mask.png").string(), "--pixel-mm", fmt::format("{}", kPixelMm),
+                        "--mesh-step", "2", "--out", (dir / "coarse").string(), "--json"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto coarse = nlohmann::json::parse(run.out)["mesh"];
+  EXPECT_EQ(coarse["step"], 2);
+  const double share = coarse["vertices"].get<double>() / summary["mesh"]["vertices"].get<double>();
+  EXPECT_NEAR(share, 0.25, 0.02);
 }
 
 TEST(Integrate, ShapePriorSolveUnderNaturalLighting) {
@@ -120,6 +131,13 @@ TEST(Integrate, BadInputNamesTheFlagOrFile) {
                         (dir / "K.txt").string(), "--out", (dir / "o").string()});
   EXPECT_NE(run.exit_code, 0);
   EXPECT_NE(run.err.find("K.txt: intrinsics: expected nine numbers"), std::string::npos) << run.err;
+  for (const char* step : {"0", "two", "1.5"}) {
+    run = run_lightstage({"integrate", "--normals", (dir / "n.png").string(), "--mesh-step", step, "--out",
+                          (dir / "o").string()});
+    EXPECT_NE(run.exit_code, 0);
+    EXPECT_NE(run.err.find(std::string("--mesh-step: '") + step + "'"), std::string::npos) << run.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "o" / "depth.pfm")) << "refused before any work";
+  }
   run = run_lightstage({"solve", "--input", (dir / "nowhere").string(), "--method", "shape-prior", "--out",
                         (dir / "r").string()});
   EXPECT_NE(run.exit_code, 0);

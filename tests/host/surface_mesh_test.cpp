@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -50,6 +51,54 @@ Dome hemisphere() {
     }
   }
   return d;
+}
+
+// Every step-th row and column: the same surface with a step² share of the
+// vertices, each one the full mesh's vertex at its pixel.
+TEST(Mesh, AGridStepKeepsEveryStepthPixelsVertexAndTheSurface) {
+  const Dome d = hemisphere();
+  const Mesh whole = mesh_from_depth(d.depth, d.mask, d.camera, d.normals, d.albedo);
+  MeshOptions options;
+  options.step = 3;
+  const Mesh coarse = mesh_from_depth(d.depth, d.mask, d.camera, d.normals, d.albedo, options);
+  int expected = 0;
+  for (int r = 0; r < d.mask.rows; r += 3)
+    for (int c = 0; c < d.mask.cols; c += 3) expected += d.mask.at<std::uint8_t>(r, c) ? 1 : 0;
+  ASSERT_EQ(coarse.vertices.size(), static_cast<std::size_t>(expected));
+  EXPECT_GT(coarse.triangles.size(), coarse.vertices.size());  // still closed inside: no edge cut
+  EXPECT_EQ(coarse.colours.size(), coarse.vertices.size());
+  EXPECT_EQ(coarse.normals.size(), coarse.vertices.size());
+  // Each coarse vertex is a vertex of the whole mesh, on the hemisphere of radius 20.
+  for (const Eigen::Vector3f& v : coarse.vertices) {
+    EXPECT_NEAR(v.norm(), 20.0f, 1e-3f);
+    EXPECT_TRUE(std::any_of(whole.vertices.begin(), whole.vertices.end(),
+                            [&](const Eigen::Vector3f& w) { return (w - v).norm() < 1e-6f; }));
+  }
+  // The triangles cover about the same area (less a rim up to two pixels wide, where the hemisphere is
+  // steep).
+  const auto area = [](const Mesh& m) {
+    double sum = 0;
+    for (const auto& t : m.triangles) {
+      const auto &a = m.vertices[static_cast<std::size_t>(t[0])],
+                 &b = m.vertices[static_cast<std::size_t>(t[1])],
+                 &c = m.vertices[static_cast<std::size_t>(t[2])];
+      sum += 0.5 * static_cast<double>((b - a).cross(c - a).norm());
+    }
+    return sum;
+  };
+  EXPECT_LT(area(coarse), area(whole));
+  EXPECT_GT(area(coarse) / area(whole), 0.85);
+  options.step = 0;
+  EXPECT_NE(error_of([&] { mesh_from_depth(d.depth, d.mask, d.camera, {}, {}, options); }).find("step"),
+            std::string::npos);
+}
+
+TEST(Mesh, TheStepForABudgetIsTheSmallestThatKeepsWithinIt) {
+  EXPECT_EQ(mesh_step_for(100, 100), 1);
+  EXPECT_EQ(mesh_step_for(101, 100), 2);
+  EXPECT_EQ(mesh_step_for(400, 100), 2);
+  EXPECT_EQ(mesh_step_for(24'000'000, 4'000'000), 3);  // a 6000x4000 depth map: 2.7 M vertices
+  EXPECT_EQ(mesh_step_for(0, 4'000'000), 1);
 }
 
 TEST(Mesh, PlyRoundTripKeepsVerticesNormalsColoursAndFaces) {

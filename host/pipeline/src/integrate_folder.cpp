@@ -7,8 +7,12 @@
 #include "lightstage/host/io/output_folder.hpp"
 #include "lightstage/host/io/solve_output.hpp"
 #include "lightstage/host/surface/depth_prior.hpp"
+#include "lightstage/host/surface/mesh.hpp"
 #include "lightstage/host/surface/surface_output.hpp"
 
+#include <fmt/format.h>
+
+#include <charconv>
 #include <optional>
 
 namespace lightstage::pipeline {
@@ -24,10 +28,22 @@ cv::Mat read_albedo(const std::filesystem::path& path) {
   return out;
 }
 
+// --mesh-step: a whole number of pixels, or nothing for "auto".
+std::optional<int> parse_mesh_step(const std::string& text) {
+  if (text == "auto") return std::nullopt;
+  int step = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), step);
+  if (error != std::errc() || end != text.data() + text.size() || step < 1)
+    throw InputError(
+        fmt::format("--mesh-step: '{}' is neither auto nor a whole number of pixels (1 or more)", text));
+  return step;
+}
+
 }  // namespace
 
 IntegrateReport integrate_folder(const IntegrateSettings& a, const surface::SurfaceProgress& on_progress) {
   if (a.normals.empty() && a.input.empty()) fail("integrate: give --normals N.png or --input RESULT_DIR");
+  const std::optional<int> mesh_step = parse_mesh_step(a.mesh_step);
   io::require_separate_output(a.out, {a.input});
   // A solve folder gives the normals and the albedo (as albedo.png shows it) unless they are given.
   std::optional<io::SolveFolder> folder;
@@ -78,6 +94,10 @@ IntegrateReport integrate_folder(const IntegrateSettings& a, const surface::Surf
   surface::SurfaceFiles files;
   files.ply = a.mesh == "ply" || a.mesh == "both";
   files.obj = a.mesh == "obj" || a.mesh == "both";
+  files.mesh_step = mesh_step
+                        ? *mesh_step
+                        : surface::mesh_step_for(static_cast<std::size_t>(cv::countNonZero(result.valid)),
+                                                 kMeshMaxVertices);
   const nlohmann::json summary =
       surface::write_surface_outputs(a.out, result, camera, normals.normals, albedo, files, extra);
   return {summary, result.stats};

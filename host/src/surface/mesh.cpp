@@ -8,6 +8,16 @@ namespace lightstage::surface {
 
 void MeshOptions::check() const {
   if (!(max_edge_ratio > 0)) fail("mesh: max_edge_ratio must be positive, got {}", max_edge_ratio);
+  if (step < 1) fail("mesh: the grid step must be at least 1, got {}", step);
+}
+
+int mesh_step_for(std::size_t valid_pixels, std::size_t max_vertices) {
+  if (max_vertices == 0) fail("mesh: the vertex budget must be positive");
+  int step = 1;
+  // Each step keeps about one pixel in step² (rounding up at the edges).
+  while (valid_pixels > max_vertices * static_cast<std::size_t>(step) * static_cast<std::size_t>(step))
+    ++step;
+  return step;
 }
 
 Mesh mesh_from_depth(const cv::Mat& depth, const cv::Mat& valid, const CameraModel& camera,
@@ -24,15 +34,17 @@ Mesh mesh_from_depth(const cv::Mat& depth, const cv::Mat& valid, const CameraMod
       ((albedo.type() != CV_32FC1 && albedo.type() != CV_32FC3 && albedo.type() != CV_8UC3) ||
        albedo.size() != depth.size()))
     fail("mesh: albedo must be CV_32FC1, CV_32FC3 or CV_8UC3 of the depth's size");
-  const int rows = depth.rows, cols = depth.cols;
+  const int step = options.step;
+  const int rows = (depth.rows + step - 1) / step, cols = (depth.cols + step - 1) / step;  // the grid
   Mesh mesh;
-  cv::Mat index(depth.size(), CV_32SC1, cv::Scalar(-1));
-  for (int r = 0; r < rows; ++r) {
-    for (int c = 0; c < cols; ++c) {
+  cv::Mat index(rows, cols, CV_32SC1, cv::Scalar(-1));
+  for (int gr = 0; gr < rows; ++gr) {
+    for (int gc = 0; gc < cols; ++gc) {
+      const int r = gr * step, c = gc * step;
       const double d = depth.at<float>(r, c);
       if ((!valid.empty() && !valid.at<std::uint8_t>(r, c)) || !std::isfinite(d)) continue;
       if (camera.perspective_model() && !(d > 0)) continue;
-      index.at<int>(r, c) = static_cast<int>(mesh.vertices.size());
+      index.at<int>(gr, gc) = static_cast<int>(mesh.vertices.size());
       mesh.vertices.push_back(camera.point(c, r, d).cast<float>());
       if (!normals.empty()) {
         const cv::Vec3f n = normals.at<cv::Vec3f>(r, c);
@@ -56,7 +68,8 @@ Mesh mesh_from_depth(const cv::Mat& depth, const cv::Mat& valid, const CameraMod
     }
   }
   auto footprint = [&](const Eigen::Vector3f& p) {
-    return camera.perspective_model() ? -p.z() / std::min(camera.K(0, 0), camera.K(1, 1)) : camera.pixel_size;
+    return step * (camera.perspective_model() ? -p.z() / std::min(camera.K(0, 0), camera.K(1, 1))
+                                              : camera.pixel_size);
   };
   auto add = [&](int a, int b, int c) {
     if (a < 0 || b < 0 || c < 0) return false;

@@ -42,11 +42,14 @@ nlohmann::json write_surface_outputs(const std::filesystem::path& dir, const Sur
                      : nlohmann::json{{"model", "orthographic"}, {"pixel_size", camera.pixel_size}}},
       {"stats", surface.stats.to_json()}};
   if (files.ply || files.obj) {
-    const Mesh mesh = mesh_from_depth(surface.depth, surface.valid, camera, normals, albedo);
+    MeshOptions mesh_options;
+    mesh_options.step = files.mesh_step;
+    const Mesh mesh = mesh_from_depth(surface.depth, surface.valid, camera, normals, albedo, mesh_options);
     if (files.ply) write_ply(dir / "mesh.ply", mesh);
     if (files.obj) write_obj(dir / "mesh.obj", mesh);
     j["mesh"] = {{"vertices", mesh.vertices.size()},
                  {"triangles", mesh.triangles.size()},
+                 {"step", files.mesh_step},
                  {"ply", files.ply ? "mesh.ply" : ""},
                  {"obj", files.obj ? "mesh.obj" : ""}};
   }

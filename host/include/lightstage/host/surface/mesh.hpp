@@ -24,16 +24,23 @@ struct Mesh {
   std::vector<std::array<std::int32_t, 3>> triangles;  // counter-clockwise seen from the camera
 };
 
-// One vertex per valid pixel; each 2×2 block of valid pixels gives two
-// triangles (three valid pixels give one), skipping blocks whose depth jumps
-// by more than `max_edge_ratio` times the pixel footprint (occluding edges).
+// One vertex per valid pixel of a grid of every `step`-th row and column (1:
+// every pixel); each 2×2 block of valid grid points gives two triangles (three
+// valid points give one), skipping blocks whose depth jumps by more than
+// `max_edge_ratio` times the grid's footprint (occluding edges).
 // `normals` (CV_32FC3 x y z, optional) become vertex normals, else normals
 // are computed from the triangles; `albedo` (CV_32FC1 or CV_32FC3 BGR in
 // [0, 1], or CV_8UC3 BGR; optional) becomes the colour.
 struct MeshOptions {
   double max_edge_ratio = 20;
+  int step = 1;
   void check() const;
 };
+
+// The grid step that keeps a mesh of `valid_pixels` within `max_vertices`
+// vertices (1 when they fit): a 24 Mpx depth map meshed whole is 24 M
+// vertices and 48 M triangles, more than mesh viewers handle.
+int mesh_step_for(std::size_t valid_pixels, std::size_t max_vertices);
 Mesh mesh_from_depth(const cv::Mat& depth, const cv::Mat& valid, const CameraModel& camera,
                      const cv::Mat& normals = {}, const cv::Mat& albedo = {},
                      const MeshOptions& options = {});

@@ -21,6 +21,7 @@ namespace lightstage::surface {
 struct SurfaceFiles {
   bool ply = true;
   bool obj = false;
+  int mesh_step = 1;  // MeshOptions::step
 };
 
 // Writes the files above into `dir` (created if needed); `normals` (the

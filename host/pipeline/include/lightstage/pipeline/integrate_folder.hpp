@@ -22,12 +22,17 @@ struct IntegrateSettings {
   std::string intrinsics;          // K.txt: perspective camera; empty = orthographic
   std::string method = "poisson";  // poisson, frankot-chellappa (fc)
   std::string mesh = "ply";        // ply, obj, both or none
-  double pixel_mm = 1.0;           // orthographic pixel size at the object
-  double mean_depth = 1.0;         // perspective without a prior: the result's mean depth
-  double prior_png_scale = 1.0;    // depth unit per DN of a 16-bit PNG prior
+  // One mesh vertex every N pixels each way; "auto": 1, or as few as keep the
+  // mesh within kMeshMaxVertices (a 24 Mpx surface meshed whole is too big to view).
+  std::string mesh_step = "auto";
+  double pixel_mm = 1.0;         // orthographic pixel size at the object
+  double mean_depth = 1.0;       // perspective without a prior: the result's mean depth
+  double prior_png_scale = 1.0;  // depth unit per DN of a 16-bit PNG prior
   surface::IntegrationOptions integration;
   surface::FusionOptions fusion;
 };
+
+inline constexpr std::size_t kMeshMaxVertices = 4'000'000;
 
 struct IntegrateReport {
   nlohmann::json summary;  // as written to surface.json
