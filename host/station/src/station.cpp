@@ -543,7 +543,11 @@ nlohmann::json Station::test_sequence_work(StationJob& job, const TestSequenceRe
         controller.run_sequence(one_led_per_step(ids, steps_options, 1), [&](const proto::StepEvent& step) {
           if (job.stop_requested() && !aborted) {  // a stop asked for before the run began
             aborted = true;
-            controller.abort();
+            try {
+              controller.abort();
+            } catch (const ControllerError&) {
+              // The run ended meanwhile.
+            }
           }
           std::vector<std::pair<std::uint32_t, float>> lit;
           for (const std::uint32_t id : step.led_ids()) lit.emplace_back(id, 1.0f);

@@ -73,7 +73,8 @@ std::optional<fs::path> contained_file(const fs::path& root, const std::string& 
   if (end != base.end() || !fs::is_regular_file(file)) return std::nullopt;
   // What a link inside the folder leads to is held to the same rule.
   for (const auto& part : file.lexically_relative(base)) {
-    if (part.string().front() == '.') return std::nullopt;
+    const std::string name = part.string();
+    if (!name.empty() && name.front() == '.') return std::nullopt;
   }
   return file;
 }
@@ -168,9 +169,12 @@ void StationServer::watch_leases() {
       station_.dark();
     } catch (const std::exception& e) {
       entry.outcome = fmt::format("failed (tried again): {}", e.what());
-      logger("station")->warn("could not darken the LEDs of an operator who went away: {}", e.what());
     }
-    if (entry.outcome != last_outcome) audit_.record(entry);
+    if (entry.outcome != last_outcome) {
+      audit_.record(entry);
+      if (entry.outcome != "ok")
+        logger("station")->warn("could not darken the LEDs of an operator who went away: {}", entry.outcome);
+    }
     last_outcome = entry.outcome;
   }
 }
