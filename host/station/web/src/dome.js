@@ -24,10 +24,6 @@ export function DomePanel({ station }) {
     asked.current = { leds: next, at: Date.now() };
     act(() => post('/api/leds', { leds: [...next].map((led) => ({ id: led })) }));
   };
-  const dark = () => {
-    asked.current = { leds: new Set(), at: Date.now() };
-    act(() => post('/api/dark'));
-  };
   return html`<section class="panel dome">
     <div>
       <${LedMap} leds=${rig.leds} lit=${lit} onPick=${operator && !busy ? toggle : null} />
@@ -53,10 +49,6 @@ export function DomePanel({ station }) {
           Run the test sequence</button>
         <label><input type="checkbox" id="test-slow" checked=${slow}
           onChange=${(e) => setSlow(e.target.checked)} /> slowly, to watch each LED</label>
-      </p>
-      <p>
-        <button id="dark" onClick=${dark}
-          title="Anyone may darken the dome, in control or not">Put every LED out</button>
       </p>
       ${status.job?.kind === 'test-sequence' && status.job.result && html`<p id="test-result">
         ${status.job.result.steps} steps; lateness median ${status.job.result.lateness_us.median.toFixed(1)} µs,
