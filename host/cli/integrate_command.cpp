@@ -86,7 +86,7 @@ void add_integrate(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--mesh-step", args->mesh_step,
                   "one mesh vertex every N pixels each way; auto: every pixel, or as few as keep the mesh "
-                  "within 4 million vertices")
+                  "near 4 million vertices")
       ->capture_default_str();
   add_output_flags(*sub, args->output, "surface.json plus out (the folder) and total_seconds");
   sub->callback([args, sub] {

@@ -132,6 +132,41 @@ TEST(CaptureRunner, AStopWithinABracketGroupEndsTheGroupFirst) {
   EXPECT_EQ(bench.cam.shots, (std::vector<std::pair<int, double>>{{4, 125}, {5, 125}, {4, 1000}, {5, 1000}}));
 }
 
+// A halt (the dome darkened) does not wait for the group: no LED is lit after it.
+TEST(CaptureRunner, AHaltStopsWithinABracketGroupAndLightsNoLedAfterIt) {
+  Bench bench(/*max_steps=*/2);
+  CaptureOptions options;
+  options.halt_requested = [&] { return bench.cam.shots.size() >= 1; };
+  CaptureRunner runner(*bench.client, bench.cam, options);
+  runner.start();
+  const CapturePlan plan = make_plan({4, 5, 6}, {{4, 1000}, {5, 1000}, {6, 1000}},
+                                     {{4, {125, 1000}}, {5, {125, 1000}}, {6, {250, 1000}}}, {-3, 0}, 0);
+  std::vector<std::size_t> handed;
+  EXPECT_THROW(
+      runner.take_frames(plan, {}, [&](std::size_t frame, std::vector<Take>&) { handed.push_back(frame); }),
+      CaptureStopped);
+  EXPECT_TRUE(handed.empty()) << "no LED's bracket was complete";
+  EXPECT_EQ(bench.cam.shots, (std::vector<std::pair<int, double>>{{4, 125}}));
+}
+
+// Without brackets, the frames taken before a halt are handed on; the batch lights no further LED.
+TEST(CaptureRunner, AHaltMidBatchKeepsTheFramesTakenAndLightsNoMore) {
+  Bench bench(/*max_steps=*/4);
+  CaptureOptions options;
+  options.halt_requested = [&] { return bench.cam.shots.size() >= 2; };
+  CaptureRunner runner(*bench.client, bench.cam, options);
+  runner.start();
+  const CapturePlan plan = make_plan({4, 5, 6, 7}, {{4, 1000}, {5, 1000}, {6, 1000}, {7, 1000}}, {}, {}, 0);
+  std::vector<std::pair<std::size_t, int>> handed;
+  EXPECT_THROW(runner.take_frames(plan, {},
+                                  [&](std::size_t frame, std::vector<Take>& takes) {
+                                    handed.emplace_back(frame, value_of(takes[0].taken));
+                                  }),
+               CaptureStopped);
+  EXPECT_EQ(handed, (std::vector<std::pair<std::size_t, int>>{{0, 4}, {1, 5}}));
+  EXPECT_EQ(bench.cam.shots.size(), 2u);
+}
+
 TEST(CaptureRunner, FramesExposedBeforeAWatchdogAbortAreHandedOnThenTheAbortIsThrown) {
   Bench bench;
   bench.cam.hardware = true;

@@ -287,13 +287,22 @@ TEST(ControllerIntegration, AnAbortFromAnotherThreadEndsTheRunningSequence) {
   std::vector<std::uint32_t> ids;
   for (std::uint32_t id = 0; id < 96; ++id) ids.push_back(id);
   std::atomic<int> seen{0};
+  std::atomic<bool> ended{false};
   std::thread darkener([&] {
-    while (seen < 2) std::this_thread::sleep_for(milliseconds(1));
+    while (seen < 2 && !ended) std::this_thread::sleep_for(milliseconds(1));
+    if (ended) return;
     client->abort();
     client->all_off();
   });
-  const SequenceRun run =
-      client->run_sequence(one_led_per_step(ids, options, 7), [&](const proto::StepEvent&) { ++seen; });
+  SequenceRun run;
+  try {
+    run = client->run_sequence(one_led_per_step(ids, options, 7), [&](const proto::StepEvent&) { ++seen; });
+  } catch (...) {
+    ended = true;
+    darkener.join();
+    throw;
+  }
+  ended = true;
   darkener.join();
   EXPECT_EQ(run.done.outcome(), proto::ABORTED_BY_HOST) << run.done.detail();
   EXPECT_GE(run.steps.size(), 2u);

@@ -98,8 +98,10 @@ void CaptureRunner::set_exposure(double exposure_us) {
   }
 }
 
+bool CaptureRunner::halt_asked() const { return options_.halt_requested && options_.halt_requested(); }
+
 bool CaptureRunner::stop_asked() const {
-  return !mid_group_ && options_.stop_requested && options_.stop_requested();
+  return halt_asked() || (!mid_group_ && options_.stop_requested && options_.stop_requested());
 }
 
 Batch CaptureRunner::run_batch(const std::vector<Shot>& shots) {
@@ -108,6 +110,7 @@ Batch CaptureRunner::run_batch(const std::vector<Shot>& shots) {
   set_exposure(shots.front().exposure_us);
   Batch batch = hardware_ ? run_batch_once(shots) : run_software_batch(shots);
   for (int attempt = 0; attempt < options_.max_retakes && batch.taken.size() < shots.size(); ++attempt) {
+    if (halt_asked()) throw BatchAborted("the capture was halted (the dome darkened)", std::move(batch));
     std::vector<std::size_t> missing;
     for (std::size_t i = 0; i < shots.size(); ++i) {
       if (!batch.taken.count(i)) missing.push_back(i);
@@ -194,7 +197,17 @@ Batch CaptureRunner::run_batch_once(const std::vector<Shot>& shots) {
   });
   SequenceRun run;
   try {
-    run = controller_.run_sequence(sequence);
+    // A halt that came after the check before this batch (or while it runs) ends it at its next step.
+    bool aborted = false;
+    run = controller_.run_sequence(sequence, [&](const proto::StepEvent&) {
+      if (aborted || !halt_asked()) return;
+      aborted = true;
+      try {
+        controller_.abort();
+      } catch (const ControllerError&) {
+        // It ended meanwhile.
+      }
+    });
   } catch (...) {
     sequence_done = true;
     reader.join();

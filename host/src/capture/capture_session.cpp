@@ -164,6 +164,15 @@ CaptureReport capture_stack(const Rig& rig, ControllerClient& controller, camera
   } catch (const CaptureStopped& e) {
     throw CaptureStopped(fmt::format("{}; the frames taken so far are kept in {} (resume completes it)",
                                      e.what(), options.out.string()));
+  } catch (const BatchAborted& e) {
+    // Cut short because a stop or a halt was asked for (darks, exposure metering): a stop, not a failure.
+    const bool asked = (options.halt_requested && options.halt_requested()) ||
+                       (options.stop_requested && options.stop_requested());
+    if (asked)
+      throw CaptureStopped(fmt::format("{}; the frames taken so far are kept in {} (resume completes it)",
+                                       e.what(), options.out.string()));
+    throw Error(fmt::format("{}; the frames taken so far are kept in {} (complete it with --resume)",
+                            e.what(), options.out.string()));
   } catch (const Error& e) {
     // The controller, the camera or the link failed: say what is kept and how to go on.
     throw Error(fmt::format("{}; the frames taken so far are kept in {} (complete it with --resume)",

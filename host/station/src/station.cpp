@@ -6,6 +6,7 @@
 #include "lightstage/host/calibration/calibrate_lights.hpp"
 #include "lightstage/host/calibration/calibration_images.hpp"
 #include "lightstage/host/calibration/calibration_output.hpp"
+#include "lightstage/host/capture/capture_runner.hpp"
 #include "lightstage/host/capture/capture_session.hpp"
 #include "lightstage/host/controller/sequences.hpp"
 #include "lightstage/host/io/image_io.hpp"
@@ -144,6 +145,10 @@ void Station::abort_sequence() {
     if (const auto connection = connected()) connection->controller->abort();
   } catch (const ControllerError&) {
     // Refused: no sequence runs.
+  } catch (const std::exception& e) {
+    // The link is gone: with no heartbeats the controller's watchdog darkens the dome.
+    logger("station")->warn("could not abort the controller's sequence: {}", e.what());
+    drop_dome(e.what());
   }
 }
 
@@ -371,6 +376,9 @@ Preview Station::preview(const PreviewRequest& request) {
     set_lit({}, false);
     throw Refused(e.code() == proto::Error::BAD_REQUEST ? 400 : 409,
                   fmt::format("the controller refused: {}", e.what()));
+  } catch (const BatchAborted& e) {
+    set_lit({}, false);  // the dome was darkened meanwhile (or the controller's limits cut it short)
+    throw Refused(409, fmt::format("the preview was cut short: {}", e.what()));
   } catch (const std::exception& e) {
     drop_dome(e.what());
     throw;
@@ -625,6 +633,8 @@ nlohmann::json Station::capture_work(StationJob& job, const CaptureRequest& requ
     set_lit({{static_cast<std::uint32_t>(progress.led_id), 1.0f}}, false);
   };
   options.stop_requested = [&] { return job.stop_requested(); };
+  options.halt_requested = [this] { return darkened_.load(); };
+  set_lit({}, false);  // what was lit by hand goes out with the first sequence: not the lease's to darken
   job.say(resume ? "resuming" : "capturing");
   const std::lock_guard lock(dome_mutex_);
   try {
@@ -646,13 +656,6 @@ nlohmann::json Station::capture_work(StationJob& job, const CaptureRequest& requ
         fmt::format("the capture was aborted; the frames taken are kept in stacks/{}", request.name));
   } catch (const std::exception& e) {
     set_lit({}, false);
-    if (darkened_) {
-      // The operator darkened the dome mid-sequence: the frames exposed before are kept.
-      throw JobStopped(
-          fmt::format("the dome was darkened: the capture is paused, its frames kept in "
-                      "stacks/{} (resume completes it)",
-                      request.name));
-    }
     drop_dome(e.what());
     throw;
   }

@@ -54,9 +54,13 @@ struct CaptureOptions {
   OutputMode mode = OutputMode::kHuman;
   // For a program that follows the capture (the operator's station): told
   // after each frame is written, and asked before each controller sequence
-  // (preview, darks, frames) whether to stop there (CaptureStopped).
+  // (preview, darks, frames; an HDR bracket group is finished first) whether
+  // to stop there (CaptureStopped). A halt (the dome darkened) stops at once:
+  // the running sequence is aborted at its next step, no LED is lit again,
+  // the frames exposed before are kept.
   std::function<void(const CaptureProgress&)> on_progress;
   std::function<bool()> stop_requested;
+  std::function<bool()> halt_requested;
 
   void check() const;  // throws InputError naming the option
 };

@@ -125,7 +125,8 @@ class CaptureRunner {
   bool hardware_ = false;
   // Within an HDR group: a stop waits for the group's last exposure, so its brackets are not lost.
   bool mid_group_ = false;
-  bool stop_asked() const;  // CaptureOptions::stop_requested, outside an HDR group
+  bool stop_asked() const;  // CaptureOptions::stop_requested outside an HDR group, or a halt
+  bool halt_asked() const;  // CaptureOptions::halt_requested
   double gain_ = 1;
   double asked_exposure_us_ = 0;
   double current_exposure_us_ = 0;  // what the camera said it applied

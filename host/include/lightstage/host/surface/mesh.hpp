@@ -37,8 +37,9 @@ struct MeshOptions {
   void check() const;
 };
 
-// The grid step that keeps a mesh of `valid_pixels` within `max_vertices`
-// vertices (1 when they fit): a 24 Mpx depth map meshed whole is 24 M
+// The smallest grid step whose share of `valid_pixels` (one in step²) is
+// within `max_vertices` (1 when they fit; the grid's rounding at the edges
+// may add a row and a column): a 24 Mpx depth map meshed whole is 24 M
 // vertices and 48 M triangles, more than mesh viewers handle.
 int mesh_step_for(std::size_t valid_pixels, std::size_t max_vertices);
 Mesh mesh_from_depth(const cv::Mat& depth, const cv::Mat& valid, const CameraModel& camera,

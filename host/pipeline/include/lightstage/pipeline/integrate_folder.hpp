@@ -23,7 +23,7 @@ struct IntegrateSettings {
   std::string method = "poisson";  // poisson, frankot-chellappa (fc)
   std::string mesh = "ply";        // ply, obj, both or none
   // One mesh vertex every N pixels each way; "auto": 1, or as few as keep the
-  // mesh within kMeshMaxVertices (a 24 Mpx surface meshed whole is too big to view).
+  // mesh near kMeshMaxVertices (a 24 Mpx surface meshed whole is too big to view).
   std::string mesh_step = "auto";
   double pixel_mm = 1.0;         // orthographic pixel size at the object
   double mean_depth = 1.0;       // perspective without a prior: the result's mean depth
