@@ -566,6 +566,17 @@ TEST(StationApi, TheSpheresOutlineIsFoundDrawnAndForgotten) {
             409);
   EXPECT_EQ(station.post("/api/stacks/c1/sphere/forget", json::object()).status, 409);
   EXPECT_EQ(cv::countNonZero(cv::imread(mask.string(), cv::IMREAD_GRAYSCALE)), 64 * 64);
+
+  // A crash after an outline's marker was written, before its mask was renamed into place: finished on the
+  // next look.
+  fs::remove(mask);
+  ASSERT_EQ(station.post("/api/stacks/c1/sphere", json{{"x_px", x}, {"y_px", y}, {"radius_px", r}}).status,
+            200);
+  fs::rename(mask, mask.parent_path() / ".mask-drawn.png");
+  EXPECT_TRUE(station.get("/api/stacks/c1/sphere").body["drawn"].get<bool>());
+  EXPECT_TRUE(fs::exists(mask));
+  EXPECT_FALSE(fs::exists(mask.parent_path() / ".mask-drawn.png"));
+  EXPECT_EQ(station.post("/api/stacks/c1/sphere/forget", json::object()).status, 200);
 }
 
 }  // namespace

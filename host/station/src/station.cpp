@@ -67,6 +67,15 @@ std::string file_bytes(const fs::path& file) {
 // Whether the stack's mask.png is still the outline this station drew (its
 // marker holds the mask's hash): anything else there is the operator's, not ours to replace.
 bool drawn_here(const fs::path& stack, const fs::path& marker) {
+  // An outline drawn just before a crash: its marker was written, its mask not yet renamed into place.
+  const fs::path drawing = stack / ".mask-drawn.png";
+  if (fs::exists(drawing)) {
+    const nlohmann::json marked = read_json_or_null(marker);
+    if (marked.is_object() && marked.value("mask_hash", "") == content_hash(file_bytes(drawing)))
+      fs::rename(drawing, stack / "mask.png");
+    else
+      fs::remove(drawing);  // written before its marker: never in use
+  }
   const nlohmann::json drawn = read_json_or_null(marker);
   return drawn.is_object() && drawn.contains("mask_hash") && fs::exists(stack / "mask.png") &&
          drawn["mask_hash"] == content_hash(file_bytes(stack / "mask.png"));
