@@ -93,6 +93,7 @@ void CaptureRunner::set_exposure(double exposure_us) {
     try {
       run_batch_once(std::vector<Shot>(static_cast<std::size_t>(latency), Shot{-1, exposure_us}));
     } catch (const BatchAborted& aborted) {
+      if (stop_asked()) throw CaptureStopped("the capture was stopped as asked");
       throw Error(aborted.what());  // its frames are thrown away: none belongs to the batch's shots
     }
   }
