@@ -157,26 +157,29 @@ CaptureReport capture_stack(const Rig& rig, ControllerClient& controller, camera
   CaptureRunner runner(controller, cam, options, rig.trigger);
   std::optional<InverseResponse> response;
   if (!options.response.empty()) response = InverseResponse::load(options.response);
+  // What is kept, and how to go on: resumed from the page after a stop, with --resume after a failure.
+  const auto stopped = [&](const std::exception& e) {
+    return CaptureStopped(fmt::format("{}; the frames taken so far are kept in {} (resume completes it)",
+                                      e.what(), options.out.string()));
+  };
+  const auto failed = [&](const std::exception& e) {
+    return Error(fmt::format("{}; the frames taken so far are kept in {} (complete it with --resume)",
+                             e.what(), options.out.string()));
+  };
   try {
     return run_capture(rig, controller, cam, options, runner, response ? &*response : nullptr);
   } catch (const InputError&) {
     throw;
   } catch (const CaptureStopped& e) {
-    throw CaptureStopped(fmt::format("{}; the frames taken so far are kept in {} (resume completes it)",
-                                     e.what(), options.out.string()));
+    throw stopped(e);
   } catch (const BatchAborted& e) {
     // Cut short because a stop or a halt was asked for (darks, exposure metering): a stop, not a failure.
     const bool asked = (options.halt_requested && options.halt_requested()) ||
                        (options.stop_requested && options.stop_requested());
-    if (asked)
-      throw CaptureStopped(fmt::format("{}; the frames taken so far are kept in {} (resume completes it)",
-                                       e.what(), options.out.string()));
-    throw Error(fmt::format("{}; the frames taken so far are kept in {} (complete it with --resume)",
-                            e.what(), options.out.string()));
+    if (asked) throw stopped(e);
+    throw failed(e);
   } catch (const Error& e) {
-    // The controller, the camera or the link failed: say what is kept and how to go on.
-    throw Error(fmt::format("{}; the frames taken so far are kept in {} (complete it with --resume)",
-                            e.what(), options.out.string()));
+    throw failed(e);  // the controller, the camera or the link failed
   }
 }
 
