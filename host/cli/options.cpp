@@ -100,8 +100,8 @@ void add_solve_flags(CLI::App& sub, pipeline::SolveSettings& args) {
   sub.add_option("--max-iterations", args.max_iterations, "bi-polynomial alternations (default 100)");
   sub.add_option("--memory-limit", args.memory_limit,
                  "memory the solve may take: auto (half the machine's), bytes, or with K, M, G: 1.5G. A "
-                 "stack that needs more is read and solved in row bands (every method but rpca and "
-                 "shape-prior; docs/large-captures.md)")
+                 "stack that needs more is read and solved in row bands (every method but shape-prior; "
+                 "docs/large-captures.md)")
       ->capture_default_str();
   sub.add_option("--falloff", args.falloff,
                  "bi-polynomial and auto: the start's incidence fall-off kappa, rho ~ 1 + kappa n.l: 'auto' "

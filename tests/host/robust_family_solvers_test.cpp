@@ -84,6 +84,33 @@ TEST(RobustFamilySolvers, ResultsDoNotDependOnTheThreadCount) {
   }
 }
 
+TEST(RobustFamilySolvers, RpcaRunsOfRowsEndWithTheRowThatFillsABlock) {
+  using Rows = std::vector<std::size_t>;
+  EXPECT_EQ(rpca_row_runs(Rows{30, 30, 30, 30, 30, 30, 30}, 64), (std::vector<int>{3, 7}));
+  // A row with a block of pixels or more is a run; a short last run joins the one before...
+  EXPECT_EQ(rpca_row_runs(Rows{100, 10, 60, 20}, 64), (std::vector<int>{1, 4}));
+  EXPECT_EQ(rpca_row_runs(Rows{100, 10, 60, 20, 31}, 64), (std::vector<int>{1, 3, 5}));
+  // ...unless it has half a block, and rows without pixels at the end join the last run.
+  EXPECT_EQ(rpca_row_runs(Rows{100, 32}, 64), (std::vector<int>{1, 2}));
+  EXPECT_EQ(rpca_row_runs(Rows{100, 0, 0}, 64), (std::vector<int>{3}));
+  EXPECT_EQ(rpca_row_runs(Rows{0, 0, 0}, 64), (std::vector<int>{3}));
+  EXPECT_EQ(rpca_row_runs(Rows{}, 64), (std::vector<int>{0}));
+  // Rows [a, b) cut at run ends are split into the whole image's runs there (what bands rely on).
+  Rows rows;
+  for (int y = 0; y < 200; ++y)
+    rows.push_back(static_cast<std::size_t>((y * 37) % 23 + (y % 50 < 5 ? 0 : 9)));
+  const std::vector<int> whole = rpca_row_runs(rows, 64);
+  ASSERT_GT(whole.size(), 10u);
+  for (std::size_t i = 0; i + 3 < whole.size(); i += 3) {
+    const int a = i == 0 ? 0 : whole[i - 1], b = whole[i + 2];
+    std::vector<int> band = rpca_row_runs(Rows(rows.begin() + a, rows.begin() + b), 64);
+    for (int& end : band) end += a;
+    EXPECT_EQ(band, std::vector<int>(whole.begin() + static_cast<long>(i),
+                                     whole.begin() + static_cast<long>(i) + 3))
+        << "rows " << a << " to " << b;
+  }
+}
+
 TEST(RobustFamilySolvers, BadOptionsNameTheirField) {
   const auto scene = make_reflectance_scene("lambert", hemisphere_lights(20, 1), 4, 4);
   RpcaOptions rpca;

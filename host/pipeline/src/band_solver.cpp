@@ -8,6 +8,7 @@
 #include "lightstage/host/radiometry.hpp"
 #include "lightstage/host/solvers/auto.hpp"
 #include "lightstage/host/solvers/bipolynomial.hpp"
+#include "lightstage/host/solvers/low_rank.hpp"
 #include "lightstage/pipeline/memory_budget.hpp"
 #include "lightstage/pipeline/solve_folder.hpp"
 
@@ -15,6 +16,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <utility>
 
 namespace lightstage::pipeline::bands {
@@ -59,7 +61,16 @@ void BandResults::add(const SolveResult& band, int y0) {
   const auto total = [&](const SolveFact& f) {
     return std::round(f.value.get<double>() * static_cast<double>(b.pixels_solved));
   };
-  if (const SolveFact* f = find_fact(b.settings, "iterations")) iterations_ += total(*f);
+  if (b.method == "rpca") {
+    // Its rounds are per block, not per pixel.
+    const auto blocks = find_fact(b.settings, "blocks")->value.get<std::size_t>();
+    rpca_blocks_ += blocks;
+    rpca_rounds_ +=
+        std::round(find_fact(b.settings, "iterations")->value.get<double>() * static_cast<double>(blocks));
+    rpca_rank_ = std::max(rpca_rank_, find_fact(b.settings, "rank")->value.get<int>());
+  } else if (const SolveFact* f = find_fact(b.settings, "iterations")) {
+    iterations_ += total(*f);
+  }
   if (const SolveFact* f = find_fact(b.findings, "mean_iterations")) mean_iterations_ += total(*f);
   if (const SolveFact* f = find_fact(b.findings, "method_counts"))
     for (const auto& [name, count] : f->value.items())
@@ -92,9 +103,13 @@ SolveResult BandResults::finish() {
     if (fact.key == "method_counts") fact = method_counts_fact(method_counts_, s.pixels_solved);
   }
   if (!find_fact(s.findings, "normals_facing_away")) s.findings.push_back(facing_away_fact(facing_away_));
-  for (SolveFact& fact : s.settings) {
-    if (fact.key == "iterations") fact = iterations_per_pixel_fact(mean(iterations_));
-  }
+  if (s.method == "rpca")
+    s.settings = rpca_settings(
+        rpca_blocks_, rpca_blocks_ > 0 ? rpca_rounds_ / static_cast<double>(rpca_blocks_) : 0, rpca_rank_);
+  else
+    for (SolveFact& fact : s.settings) {
+      if (fact.key == "iterations") fact = iterations_per_pixel_fact(mean(iterations_));
+    }
   s.message = s.format_message();
   return std::move(whole_);
 }
@@ -115,6 +130,33 @@ BandSolver::BandSolver(const std::filesystem::path& input, const SolveSettings& 
   if (!calibration.file.empty())
     applied_ = calibration::apply_calibration_file(calibration.file, input, meta_);
   background_ = background_sample_mask(meta_.mask);
+  if (settings.method == "rpca") {
+    band_ends_ = rpca_band_ends();
+    int highest = 0;
+    for (std::size_t b = 0; b < band_ends_.size(); ++b)
+      highest = std::max(highest, band_ends_[b] - (b == 0 ? 0 : band_ends_[b - 1]));
+    if (highest > plan_.band_rows)
+      logger("host")->warn(
+          "{}: rpca decomposes {} rows together, more than the {} rows --memory-limit allows", input.string(),
+          highest, plan_.band_rows);
+    plan_.band_rows = highest;
+    plan_.bands = static_cast<int>(band_ends_.size());
+  }
+}
+
+std::vector<int> BandSolver::rpca_band_ends() const {
+  std::vector<std::size_t> row_pixels(static_cast<std::size_t>(size().height));
+  for (int y = 0; y < size().height; ++y) row_pixels[static_cast<std::size_t>(y)] = mask_pixels(y, y + 1);
+  const std::vector<int> runs = rpca_row_runs(row_pixels, settings_.rpca.block_pixels);
+  std::vector<int> ends;
+  int y0 = 0;
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    // The band takes this run, and ends here unless the next run fits in it too.
+    if (r + 1 < runs.size() && runs[r + 1] - y0 <= plan_.band_rows) continue;
+    ends.push_back(runs[r]);
+    y0 = runs[r];
+  }
+  return ends;
 }
 
 std::size_t BandSolver::mask_pixels(int begin, int end) const {
@@ -125,8 +167,13 @@ std::size_t BandSolver::mask_pixels(int begin, int end) const {
 void BandSolver::for_each_band(int begin, int end, const BandVisit& visit) {
   // A pixel's place among the region's mask pixels seeds its random draws.
   std::size_t first_pixel = mask_pixels(0, begin);
-  for (int y0 = begin; y0 < end; y0 += plan_.band_rows) {
-    const int rows = std::min(plan_.band_rows, end - y0);
+  // rpca's bands cover the whole region (it solves in no tiles).
+  if (!band_ends_.empty() && (begin != 0 || end != size().height))
+    throw std::logic_error(
+        fmt::format("rpca's bands cover rows 0 to {}, not {} to {}", size().height, begin, end));
+  std::size_t index = 0;
+  for (int y0 = begin; y0 < end; ++index) {
+    const int rows = band_ends_.empty() ? std::min(plan_.band_rows, end - y0) : band_ends_.at(index) - y0;
     ImageStack band = read_region_rows(stack_, region_, region_.y + y0, rows);
     for (std::size_t i = 0; i < band.frames.size(); ++i) {
       Frame frame = meta_.frames[i];
@@ -141,6 +188,7 @@ void BandSolver::for_each_band(int begin, int end, const BandVisit& visit) {
     observations.first_pixel = first_pixel;
     first_pixel += observations.pixel_count();
     visit(band, observations, y0);
+    y0 += rows;
   }
 }
 

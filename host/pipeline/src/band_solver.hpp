@@ -22,6 +22,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace lightstage::pipeline::bands {
 
@@ -47,8 +48,11 @@ class BandResults {
   SolveResult whole_;
   bool started_ = false;
   std::size_t facing_away_ = 0;
-  double iterations_ = 0;       // l1/sbl's setting, in total over the pixels
-  double mean_iterations_ = 0;  // the bi-polynomial's finding, in total
+  double iterations_ = 0;        // l1/sbl's setting, in total over the pixels
+  double mean_iterations_ = 0;   // the bi-polynomial's finding, in total
+  std::size_t rpca_blocks_ = 0;  // rpca's blocks, their ALM rounds in total, the highest rank
+  double rpca_rounds_ = 0;
+  int rpca_rank_ = 0;
   nlohmann::json method_counts_ = nlohmann::json::object();
 };
 
@@ -104,9 +108,14 @@ class BandSolver {
   void set_progress(const SolveProgress& progress) { settings_.set_progress(progress); }
   // The mask pixels of rows [begin, end) of the region.
   std::size_t mask_pixels(int begin, int end) const;
+  // The plan the bands follow (rpca's bands end where its runs of rows do).
+  const BandPlan& plan() const { return plan_; }
 
  private:
   using BandVisit = std::function<void(ImageStack& band, Observations& observations, int y0)>;
+  // rpca's bands: each ends at an end of the runs of rows it decomposes together (rpca_row_runs),
+  // as near the plan's height as they allow.
+  std::vector<int> rpca_band_ends() const;
   void for_each_band(int begin, int end, const BandVisit& visit);
   // Sets a band's lights (warning once about what they are) and returns the
   // plan of every band's solve, made from the first band.
@@ -125,6 +134,7 @@ class BandSolver {
   nlohmann::json light_model_;
   std::optional<SolvePlan> solve_plan_;
   std::optional<report::LightStatisticsTally> light_statistics_;
+  std::vector<int> band_ends_;  // each band's end row when bands are not all band_rows high
 };
 
 // Finishes the solve folder of a result made of bands, whose maps `writer`

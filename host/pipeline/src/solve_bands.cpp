@@ -37,8 +37,8 @@ constexpr std::size_t kGroundTruthBytes = 6 + 12 + 12;
 constexpr std::size_t kSampleBytes = 8 + 24 + 1 + 8 + 4 + 1;
 constexpr std::size_t kSampleBytesPerTerm = 8;
 
-constexpr std::array kBandMethods = {"l2",       "robust",      "monotonic", "l1",  "sbl",
-                                     "bilinear", "biquadratic", "bicubic",   "auto"};
+constexpr std::array kBandMethods = {"l2",  "robust",   "monotonic",   "rpca",    "l1",
+                                     "sbl", "bilinear", "biquadratic", "bicubic", "auto"};
 // Tiles are solved by jobs that do not see each other: only the methods with no object-wide
 // estimate beyond the shadow threshold (which `--tile prepare` shares).
 constexpr std::array kTileMethods = {"l2", "robust", "monotonic", "l1", "sbl"};
@@ -110,7 +110,7 @@ SolveReport solve_folder_in_bands(const std::filesystem::path& input, const Solv
   bands::BandSolver solver(input, settings, calibration, stack, plan);
   io::require_separate_output(out, {input});
   logger("host")->info("{}: {} to solve whole; solving in {} bands of {} rows", input.string(),
-                       describe_bytes(plan.whole_bytes), plan.bands, plan.band_rows);
+                       describe_bytes(plan.whole_bytes), solver.plan().bands, solver.plan().band_rows);
   if (plan.report_bytes > plan.limit_bytes)
     logger("host")->warn("{}: the report will take about {}, over --memory-limit {}", input.string(),
                          describe_bytes(plan.report_bytes), describe_bytes(plan.limit_bytes));

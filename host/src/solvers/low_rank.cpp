@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <utility>
 #include <vector>
 
 namespace lightstage {
@@ -166,6 +167,30 @@ nlohmann::json RpcaOptions::to_json() const {
           {"threads", threads}};
 }
 
+std::vector<SolveFact> rpca_settings(std::size_t blocks, double mean_rounds, int max_rank) {
+  return {{"blocks", blocks, fmt::format("{} blocks", blocks)},
+          {"iterations", mean_rounds, fmt::format("{:.0f} ALM rounds per block", mean_rounds)},
+          {"rank", max_rank, fmt::format("rank of A at most {}", max_rank)}};
+}
+
+std::vector<int> rpca_row_runs(const std::vector<std::size_t>& row_pixels, int block_pixels) {
+  const auto block = static_cast<std::size_t>(std::max(block_pixels, 1));
+  std::vector<int> ends;
+  std::size_t pending = 0;
+  for (std::size_t y = 0; y < row_pixels.size(); ++y) {
+    pending += row_pixels[y];
+    if (pending < block) continue;
+    ends.push_back(static_cast<int>(y + 1));
+    pending = 0;
+  }
+  const int rows = static_cast<int>(row_pixels.size());
+  if (ends.empty() || (pending > 0 && pending >= block / 2))
+    ends.push_back(rows);
+  else
+    ends.back() = rows;  // a short last run, or rows without pixels, join the run before
+  return ends;
+}
+
 SolveResult solve_rpca(const Observations& observations, const RpcaOptions& options) {
   options.check();
   check_observations(observations, "rpca");
@@ -173,15 +198,28 @@ SolveResult solve_rpca(const Observations& observations, const RpcaOptions& opti
   SolveResult result;
   const cv::Size size = observations.size;
   detail::allocate_result_maps(size, result);
-  // Equal blocks of at most block_pixels rows; their split depends on the pixel count only, so
-  // results do not depend on the thread count.
+  // Each run of rows split into equal blocks of block_pixels to twice that (a short last run less): the split
+  // depends on the rows' pixel counts only, so results do not depend on the thread count or on bands cut at
+  // run ends.
   const std::size_t pixels = observations.pixel_count();
+  std::vector<std::size_t> row_pixels(static_cast<std::size_t>(size.height), 0);
+  for (const cv::Point& at : observations.pixels) ++row_pixels[static_cast<std::size_t>(at.y)];
   const auto block = static_cast<std::size_t>(options.block_pixels);
-  const std::size_t blocks = pixels == 0 ? 0 : (pixels + block - 1) / block;
+  std::vector<std::pair<std::size_t, std::size_t>> ranges;  // [begin, end) of each block
+  std::size_t run_begin = 0;
+  int row = 0;
+  for (const int run_end : rpca_row_runs(row_pixels, options.block_pixels)) {
+    std::size_t run_pixels = 0;
+    for (; row < run_end; ++row) run_pixels += row_pixels[static_cast<std::size_t>(row)];
+    const std::size_t pieces = std::max<std::size_t>(run_pixels / block, run_pixels > 0 ? 1 : 0);
+    for (std::size_t k = 0; k < pieces; ++k)
+      ranges.emplace_back(run_begin + run_pixels * k / pieces, run_begin + run_pixels * (k + 1) / pieces);
+    run_begin += run_pixels;
+  }
+  const std::size_t blocks = ranges.size();
   std::vector<BlockOutcome> outcomes(blocks);
   parallel_for(static_cast<int>(blocks), options.threads, [&](int b) {
-    const std::size_t begin = pixels * static_cast<std::size_t>(b) / blocks;
-    const std::size_t end = pixels * static_cast<std::size_t>(b + 1) / blocks;
+    const auto [begin, end] = ranges[static_cast<std::size_t>(b)];
     outcomes[static_cast<std::size_t>(b)] = solve_block(observations, options, begin, end, result);
     if (options.progress) options.progress(end - begin);
   });
@@ -200,9 +238,7 @@ SolveResult solve_rpca(const Observations& observations, const RpcaOptions& opti
   if (blocks > 0) iterations /= static_cast<double>(blocks);
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.parameters = options.to_json();
-  summary.settings = {{"blocks", blocks, fmt::format("{} blocks", blocks)},
-                      {"iterations", iterations, fmt::format("{:.0f} ALM rounds per block", iterations)},
-                      {"rank", max_rank, fmt::format("rank of A at most {}", max_rank)}};
+  summary.settings = rpca_settings(blocks, iterations, max_rank);
   summary.message = summary.format_message();
   return result;
 }

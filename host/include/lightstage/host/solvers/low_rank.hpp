@@ -10,14 +10,19 @@
 // squares fit of its row of A to the known lights (all images).
 //
 // Memory: the whole matrix is never held at once. Pixels are processed in
-// blocks of block_pixels rows (each block is itself low rank, so the
-// decomposition is done per block, in parallel); a block costs about
-// 5 × block_pixels × images doubles. λ = lambda_scale / √block_pixels.
+// blocks of block_pixels to 2 × block_pixels rows of D (each block is itself
+// low rank, so the decomposition is done per block, in parallel); a block
+// costs about 5 × its rows × images doubles. λ = lambda_scale / √(the block's rows).
+// Blocks are cut from runs of whole image rows (rpca_row_runs), so a band of
+// rows that starts and ends where runs do is decomposed as in the whole image.
 
 #include "lightstage/host/radiometry.hpp"
 #include "lightstage/host/solvers/solve_result.hpp"
 
 #include <nlohmann/json.hpp>
+
+#include <cstddef>
+#include <vector>
 
 namespace lightstage {
 
@@ -35,6 +40,19 @@ struct RpcaOptions {
   void check() const;
   nlohmann::json to_json() const;
 };
+
+// Image rows grouped into the runs whose pixels rpca splits into blocks, from
+// each row's pixel count: a run ends with the row that brings it to
+// block_pixels pixels; a last run under half that joins the one before, and
+// rows without pixels at the end join the last run. Returns each run's end row
+// (exclusive), the last being the row count; one run when no row has a pixel.
+// A run depends only on the rows above it, so the runs of rows [a, b), where a
+// and b are run ends of the whole image, are the whole image's runs there.
+std::vector<int> rpca_row_runs(const std::vector<std::size_t>& row_pixels, int block_pixels);
+
+// The summary's settings of an rpca solve: its blocks, their mean ALM rounds
+// and the highest rank of A (also what bands of one solve make together).
+std::vector<SolveFact> rpca_settings(std::size_t blocks, double mean_rounds, int max_rank);
 
 SolveResult solve_rpca(const Observations& observations, const RpcaOptions& options = {});
 
