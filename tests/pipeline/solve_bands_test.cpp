@@ -50,10 +50,13 @@ SolveSettings settings_for(const std::string& method, const std::string& memory_
   return s;
 }
 
-// A --memory-limit that gives `stack` solved with `method` bands of `rows` rows.
-std::string limit_for_rows(const fs::path& stack, int rows, const std::string& method = "l2") {
-  const BandPlan whole = plan_bands(io::read_stack_outline(stack), std::numeric_limits<std::size_t>::max(),
-                                    coefficient_terms(method));
+// A --memory-limit that gives `stack` solved with `settings` bands of `rows` rows.
+std::string limit_for_rows(const fs::path& stack, int rows,
+                           const SolveSettings& settings = settings_for("l2", "auto")) {
+  const io::StackOutline outline = io::read_stack_outline(stack);
+  const BandPlan whole =
+      plan_bands(outline, std::numeric_limits<std::size_t>::max(), coefficient_terms(settings.method),
+                 solver_working_bytes(settings, outline.images));
   return std::to_string(whole.fixed_bytes + static_cast<std::size_t>(rows) * whole.row_bytes);
 }
 
@@ -69,7 +72,7 @@ void expect_bands_equal_whole(const fs::path& stack, SolveSettings settings, con
                               int bands = 8) {
   const std::string name = settings.method;
   const SolveReport whole = solve_folder(stack, settings, out / (name + "_whole"));
-  settings.memory_limit = limit_for_rows(stack, 5, settings.method);
+  settings.memory_limit = limit_for_rows(stack, 5, settings);
   const SolveReport banded = solve_folder(stack, settings, out / (name + "_bands"));
   SCOPED_TRACE(name);
   EXPECT_FALSE(whole.summary.contains("bands"));

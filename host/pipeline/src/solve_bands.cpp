@@ -50,7 +50,8 @@ nlohmann::json BandPlan::to_json() const {
           {"report_bytes", report_bytes}, {"band_rows", band_rows},     {"bands", bands}};
 }
 
-BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit, int coefficient_terms) {
+BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit, int coefficient_terms,
+                    std::size_t working_bytes) {
   const cv::Size size = stack.size;
   const auto width = static_cast<std::size_t>(size.width);
   const auto pixels = width * static_cast<std::size_t>(size.height);
@@ -66,7 +67,7 @@ BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit, int
   const auto coefficients = static_cast<std::size_t>(std::max(coefficient_terms, 0)) * sizeof(float) * 3;
   plan.row_bytes = decoded + width * (kObservationBytes * images + kPixelBytes + kMapBytes + coefficients);
   // The program and what is held for the whole image; the output maps go to their files band by band.
-  plan.fixed_bytes = kProcessBytes + pixels * kHeldBytes;
+  plan.fixed_bytes = kProcessBytes + pixels * kHeldBytes + working_bytes;
   // The relighting refit's sample: each pixel's values, lights and flags (RelightingSample).
   if (coefficient_terms > 0)
     plan.fixed_bytes += static_cast<std::size_t>(RelightingFitOptions{}.sample_pixels) * images *

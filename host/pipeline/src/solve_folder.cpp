@@ -143,7 +143,8 @@ SolveReport solve_folder(const std::filesystem::path& input, const SolveSettings
   const cv::Rect region = solve_region(settings, outline.size, input);
   outline.size.height = region.height;  // frames are decoded full width, then cut to the region
   const BandPlan plan =
-      plan_bands(outline, parse_memory_limit(settings.memory_limit), coefficient_terms(settings.method));
+      plan_bands(outline, parse_memory_limit(settings.memory_limit), coefficient_terms(settings.method),
+                 solver_working_bytes(settings, outline.images));
   if (plan.bands > 1) {
     io::StackBands stack(input);
     SolveSettings banded = settings;

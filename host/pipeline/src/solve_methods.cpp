@@ -188,6 +188,10 @@ int coefficient_terms(const std::string& method) {
   return order == 0 ? 0 : bipolynomial_term_count(order) + 1;  // and the specular lobe's weight
 }
 
+std::size_t solver_working_bytes(const SolveSettings& settings, std::size_t images) {
+  return settings.method == "rpca" ? rpca_working_bytes(settings.rpca, images) : 0;
+}
+
 std::optional<BiPolynomialOptions> falloff_estimating_options(const SolveSettings& settings) {
   if (settings.method == "monotonic" && settings.azimuth_from != "isotropy" &&
       settings.azimuth_from != "monotonic") {

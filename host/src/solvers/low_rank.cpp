@@ -167,6 +167,14 @@ nlohmann::json RpcaOptions::to_json() const {
           {"threads", threads}};
 }
 
+std::size_t rpca_working_bytes(const RpcaOptions& options, std::size_t images) {
+  // D, Ω, A, E, Y and two temporaries of rows × images doubles (solve_block).
+  constexpr std::size_t kMatrices = 7;
+  const auto rows = 2 * static_cast<std::size_t>(options.block_pixels);
+  return static_cast<std::size_t>(resolve_threads(options.threads)) * kMatrices * rows * images *
+         sizeof(double);
+}
+
 std::vector<SolveFact> rpca_settings(std::size_t blocks, double mean_rounds, int max_rank) {
   return {{"blocks", blocks, fmt::format("{} blocks", blocks)},
           {"iterations", mean_rounds, fmt::format("{:.0f} ALM rounds per block", mean_rounds)},

@@ -50,6 +50,10 @@ struct RpcaOptions {
 // and b are run ends of the whole image, are the whole image's runs there.
 std::vector<int> rpca_row_runs(const std::vector<std::size_t>& row_pixels, int block_pixels);
 
+// What rpca's blocks take at once beside the observations: each of its
+// threads decomposing a block of the largest size (2 × block_pixels rows).
+std::size_t rpca_working_bytes(const RpcaOptions& options, std::size_t images);
+
 // The summary's settings of an rpca solve: its blocks, their mean ALM rounds
 // and the highest rank of A (also what bands of one solve make together).
 std::vector<SolveFact> rpca_settings(std::size_t blocks, double mean_rounds, int max_rank);

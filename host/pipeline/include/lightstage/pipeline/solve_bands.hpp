@@ -50,8 +50,11 @@ struct BandPlan {
 // when it fits, else the tallest bands that fit. Throws InputError naming
 // --memory-limit when not even a band of one row fits.
 // `coefficient_terms`: the most reflectance coefficients a pixel of the
-// method's result has (coefficient_terms in solve_methods.hpp).
-BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit, int coefficient_terms = 0);
+// method's result has (coefficient_terms in solve_methods.hpp);
+// `working_bytes`: what the solver holds beside its band whatever the band's
+// height (solver_working_bytes).
+BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit, int coefficient_terms = 0,
+                    std::size_t working_bytes = 0);
 
 // Whether `method` can be solved band by band (see above).
 bool solves_in_bands(const std::string& method);

@@ -74,6 +74,9 @@ void describe_relighting_fit(const RelightingFit& fit, nlohmann::json& reflectan
 // coefficients a pixel of it may have at most (its polynomial's and the lobe's; 0 for the others).
 bool method_refits_relighting(const std::string& method);
 int coefficient_terms(const std::string& method);
+// What --method's solver holds at once beside a band's observations and maps, whatever the band's
+// height, for a stack of `images` (rpca's blocks; 0 for the per-pixel methods).
+std::size_t solver_working_bytes(const SolveSettings& settings, std::size_t images);
 
 // The bi-polynomial options with which the method of `settings` estimates the
 // object's incidence fall-off κ from the observations it solves
