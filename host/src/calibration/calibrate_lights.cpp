@@ -18,9 +18,19 @@ namespace {
 namespace fs = std::filesystem;
 
 struct StackSpheres {
-  CalibrationImages images;
+  CalibrationImages images;          // the index: its images are decoded as their highlights are sought
+  cv::Mat median;                    // of every image whole
+  cv::Rect region;                   // the pixels the highlights are sought in, around every sphere
   std::vector<std::size_t> spheres;  // indices into LightCalibration::spheres
 };
+
+// The pixels find_highlight looks at on `circle`, within the image.
+cv::Rect highlight_region(const ImageCircle& circle, cv::Size size) {
+  const int x0 = static_cast<int>(std::floor(circle.centre_px.x() - circle.radius_px)) - 1;
+  const int y0 = static_cast<int>(std::floor(circle.centre_px.y() - circle.radius_px)) - 1;
+  const int side = static_cast<int>(std::ceil(2 * circle.radius_px)) + 3;
+  return cv::Rect(x0, y0, side, side) & cv::Rect(cv::Point(0, 0), size);
+}
 
 CameraGeometry choose_camera(const LightCalibrationOptions& options, const CalibrationImages& images,
                              const std::optional<Rig>& rig) {
@@ -78,7 +88,7 @@ void report_position_accuracy(const LightCalibration& cal) {
 
 }  // namespace
 
-std::vector<ImageCircle> find_sphere_circles(const CalibrationImages& images,
+std::vector<ImageCircle> find_sphere_circles(const CalibrationImages& images, const cv::Mat& median,
                                              const LightCalibrationOptions& options) {
   SphereDetectionOptions detection = options.detection;
   detection.expected = options.spheres_per_stack;
@@ -90,7 +100,7 @@ std::vector<ImageCircle> find_sphere_circles(const CalibrationImages& images,
     circles = circles_from_mask(images.mask, detection, (images.folder / "mask.png").string());
   } else {
     circles =
-        detect_circles(median_image(images.grey), detection,
+        detect_circles(median, detection,
                        fmt::format("{} (median of its {} images)", images.folder.string(), images.size()));
   }
   // Left to right, then top to bottom: the same order in every stack.
@@ -150,8 +160,9 @@ LightCalibrationRun calibrate_lights(const LightCalibrationOptions& options) {
   // Load every stack and place its spheres.
   std::vector<StackSpheres> stacks;
   for (std::size_t s = 0; s < options.inputs.size(); ++s) {
-    StackSpheres stack{load_calibration_images(options.inputs[s], 1, options.threads), {}};
-    const CalibrationImages& images = stack.images;
+    // The median and brightest images first, a band of rows at a time; then only the spheres' pixels.
+    StackSpheres stack{load_calibration_index(options.inputs[s]), {}, {}, {}};
+    CalibrationImages& images = stack.images;
     if (s == 0) {
       cal.camera = choose_camera(options, images, rig);
     } else {
@@ -172,7 +183,11 @@ LightCalibrationRun calibrate_lights(const LightCalibrationOptions& options) {
     const double z = options.sphere_z_mm.empty()       ? cal.object_position_mm.z()
                      : options.sphere_z_mm.size() == 1 ? options.sphere_z_mm.front()
                                                        : options.sphere_z_mm[s];
-    for (const auto& circle : find_sphere_circles(images, options)) {
+    CalibrationViews views = calibration_views(images, options.threads);
+    stack.median = std::move(views.median);
+    cv::Rect region;
+    for (const auto& circle : find_sphere_circles(images, stack.median, options)) {
+      region |= highlight_region(circle, images.image_size);
       stack.spheres.push_back(cal.spheres.size());
       cal.spheres.push_back({images.folder, locate_sphere(circle, cal.camera, z, options.sphere_radius_mm)});
       logger("host")->info(
@@ -180,7 +195,11 @@ LightCalibrationRun calibrate_lights(const LightCalibrationOptions& options) {
           images.folder.string(), circle.centre_px.x(), circle.centre_px.y(), circle.radius_px, circle.source,
           circle.rms_px);
     }
-    run.sphere_views.push_back(max_image(images.grey));
+    if (region.empty())
+      fail("{}: no sphere lies inside the {}x{} images", images.folder.string(), images.width(),
+           images.height());
+    stack.region = region;
+    run.sphere_views.push_back(std::move(views.maximum));
     stacks.push_back(std::move(stack));
   }
 
@@ -193,27 +212,35 @@ LightCalibrationRun calibrate_lights(const LightCalibrationOptions& options) {
     cal.lights[i].led_id = first.led_ids[i];
   }
   for (const auto& stack : stacks) {
-    const cv::Mat background = median_image(stack.images.grey);
-    for (const std::size_t sphere_index : stack.spheres) {
-      const MirrorSphere& sphere = cal.spheres[sphere_index].sphere;
-      std::vector<SphereObservation> found(lights);
-      parallel_chunks(lights, options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i) {
-          found[i].sphere = sphere_index;
-          found[i].highlight = find_highlight(stack.images.grey[i], background, stack.images.saturated[i],
-                                              sphere.circle, options.highlight);
-          if (found[i].highlight.usable())
-            found[i].reflection = reflect_at(sphere, cal.camera, found[i].highlight.centre_px);
-        }
-      });
+    const cv::Mat background = stack.median(stack.region);
+    const Vec2 origin(stack.region.x, stack.region.y);
+    // found[k][i]: the stack's sphere k in image i. Each image is decoded once, around the spheres only.
+    std::vector<std::vector<SphereObservation>> found(stack.spheres.size(),
+                                                      std::vector<SphereObservation>(lights));
+    for_each_calibration_image(stack.images, stack.region, options.threads,
+                               [&](std::size_t i, const cv::Mat& grey, const cv::Mat& saturated) {
+                                 for (std::size_t k = 0; k < stack.spheres.size(); ++k) {
+                                   const MirrorSphere& sphere = cal.spheres[stack.spheres[k]].sphere;
+                                   ImageCircle circle = sphere.circle;  // in the region's pixels
+                                   circle.centre_px -= origin;
+                                   SphereObservation& o = found[k][i];
+                                   o.sphere = stack.spheres[k];
+                                   o.highlight =
+                                       find_highlight(grey, background, saturated, circle, options.highlight);
+                                   o.highlight.centre_px += origin;
+                                   if (o.highlight.usable())
+                                     o.reflection = reflect_at(sphere, cal.camera, o.highlight.centre_px);
+                                 }
+                               });
+    for (std::size_t k = 0; k < stack.spheres.size(); ++k) {
       for (std::size_t i = 0; i < lights; ++i) {
-        const Highlight& h = found[i].highlight;
+        const Highlight& h = found[k][i].highlight;
         if (h.status != HighlightStatus::kFound) {
           cal.problems.push_back(fmt::format("{}: sphere {}: {}: {}",
                                              (stack.images.folder / stack.images.filenames[i]).string(),
-                                             sphere_index, status_name(h.status), h.note));
+                                             stack.spheres[k], status_name(h.status), h.note));
         }
-        cal.lights[i].observations.push_back(std::move(found[i]));
+        cal.lights[i].observations.push_back(std::move(found[k][i]));
       }
     }
   }

@@ -7,12 +7,14 @@
 #include "lightstage/common/parallel.hpp"
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/mask.hpp"
+#include "lightstage/host/io/row_reader.hpp"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <fstream>
 #include <limits>
+#include <memory>
 
 namespace lightstage::calibration {
 namespace {
@@ -75,7 +77,7 @@ std::optional<CameraGeometry> camera_from_manifest(const fs::path& path) {
   return std::nullopt;
 }
 
-CalibrationImages load_calibration_images(const fs::path& folder, int min_images, int threads) {
+CalibrationImages load_calibration_index(const fs::path& folder, int min_images) {
   std::error_code error;
   if (!fs::is_directory(folder, error)) fail("{}: no such stack folder", folder.string());
   const fs::path names_path = folder / "filenames.txt";
@@ -95,58 +97,122 @@ CalibrationImages load_calibration_images(const fs::path& folder, int min_images
   ImageStack stack;
   stack.frames.resize(names.size());
   for (std::size_t i = 0; i < names.size(); ++i) stack.frames[i].filename = names[i].text;
-  parallel_chunks(names.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i)
-      stack.frames[i].image = io::read_image(folder / stack.frames[i].filename);
-  });
-  const cv::Mat& first = stack.frames.front().image;
-  for (const auto& frame : stack.frames) {
-    if (frame.image.size() != first.size() || frame.image.type() != first.type()) {
-      fail("{}: image is {}x{} of type {}, but {} is {}x{} of type {}", (folder / frame.filename).string(),
-           frame.image.cols, frame.image.rows, frame.image.type(), stack.frames.front().filename, first.cols,
-           first.rows, first.type());
-    }
-  }
   CalibrationImages images;
   images.folder = folder;
+  {
+    const auto first = io::open_row_reader(folder / stack.frames.front().filename);
+    images.image_size = first->size();
+    images.image_type = first->type();
+  }
+  const cv::Size size = images.image_size;
   const fs::path manifest_path = folder / "manifest.json";
   if (fs::exists(manifest_path, error)) {
     io::apply_manifest(manifest_path, stack);
     images.camera = camera_from_manifest(manifest_path);
-    if (images.camera && (images.camera->width != first.cols || images.camera->height != first.rows)) {
+    if (images.camera && (images.camera->width != size.width || images.camera->height != size.height)) {
       fail("{}: the camera is {}x{}, the images are {}x{}", manifest_path.string(), images.camera->width,
-           images.camera->height, first.cols, first.rows);
+           images.camera->height, size.width, size.height);
     }
   }
   const fs::path mask_path = folder / "mask.png";
   if (fs::exists(mask_path, error)) {
     images.mask = io::read_mask(mask_path);
-    if (images.mask.size() != first.size()) {
+    if (images.mask.size() != size) {
       fail("{}: mask is {}x{}, images are {}x{}", mask_path.string(), images.mask.cols, images.mask.rows,
-           first.cols, first.rows);
+           size.width, size.height);
     }
   }
-  images.filenames.resize(names.size());
-  images.led_ids.resize(names.size());
-  images.grey.resize(names.size());
-  images.saturated.resize(names.size());
-  parallel_chunks(names.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      convert(stack.frames[i], &images.grey[i], &images.saturated[i]);
-      images.filenames[i] = stack.frames[i].filename;
-      images.led_ids[i] = stack.frames[i].led_id;
-      stack.frames[i].image.release();
-    }
-  });
+  images.region = cv::Rect(cv::Point(0, 0), size);
+  for (const Frame& frame : stack.frames) {
+    images.filenames.push_back(frame.filename);
+    images.led_ids.push_back(frame.led_id);
+  }
+  images.frames = std::move(stack.frames);
   return images;
 }
 
-cv::Mat median_image(const std::vector<cv::Mat>& images) {
+namespace {
+
+// Opens image `i`'s file for reading by rows, refusing one of another size or type than the first.
+std::unique_ptr<io::RowReader> open_frame(const CalibrationImages& images, std::size_t i) {
+  auto reader = io::open_row_reader(images.folder / images.filenames[i]);
+  if (reader->size() != images.image_size || reader->type() != images.image_type) {
+    fail("{}: image is {}x{} of type {}, but {} is {}x{} of type {}", reader->path().string(),
+         reader->size().width, reader->size().height, reader->type(), images.filenames.front(),
+         images.image_size.width, images.image_size.height, images.image_type);
+  }
+  return reader;
+}
+
+}  // namespace
+
+void for_each_calibration_image(const CalibrationImages& index, const cv::Rect& region, int threads,
+                                const CalibrationImageVisit& visit) {
+  const cv::Rect whole(cv::Point(0, 0), index.image_size);
+  if (region.empty() || (region & whole) != region)
+    fail("{}: region {}x{} at ({}, {}) is not inside the {}x{} images", index.folder.string(), region.width,
+         region.height, region.x, region.y, whole.width, whole.height);
+  parallel_chunks(index.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      Frame frame = index.frames[i];
+      cv::Mat rows, grey, saturated;
+      open_frame(index, i)->read(region.y, region.height, rows);
+      frame.image = rows.colRange(region.x, region.x + region.width);
+      convert(frame, &grey, &saturated);
+      visit(i, grey, saturated);
+    }
+  });
+}
+
+void load_calibration_pixels(CalibrationImages& images, const cv::Rect& region, int threads) {
+  std::vector<cv::Mat> grey(images.size()), saturated(images.size());
+  for_each_calibration_image(images, region, threads, [&](std::size_t i, const cv::Mat& g, const cv::Mat& s) {
+    grey[i] = g;
+    saturated[i] = s;
+  });
+  images.region = region;
+  images.grey = std::move(grey);
+  images.saturated = std::move(saturated);
+}
+
+CalibrationImages load_calibration_images(const fs::path& folder, int min_images, int threads) {
+  CalibrationImages images = load_calibration_index(folder, min_images);
+  load_calibration_pixels(images, cv::Rect(cv::Point(0, 0), images.image_size), threads);
+  return images;
+}
+
+CalibrationViews calibration_views(const CalibrationImages& images, int threads, std::size_t band_bytes) {
+  const cv::Size size = images.image_size;
+  const std::size_t n = images.size();
+  std::vector<std::unique_ptr<io::RowReader>> readers(n);
+  for (std::size_t i = 0; i < n; ++i) readers[i] = open_frame(images, i);
+  // Per pixel of a band, each image decoded (at most float RGB) and made grey with its saturation flag.
+  const std::size_t row_bytes = static_cast<std::size_t>(size.width) * n * (12 + 4 + 1);
+  const int band_rows = static_cast<int>(std::clamp<std::size_t>(
+      band_bytes / std::max<std::size_t>(row_bytes, 1), 1, static_cast<std::size_t>(size.height)));
+  CalibrationViews views{cv::Mat(size, CV_32FC1), cv::Mat(size, CV_32FC1)};
+  std::vector<cv::Mat> grey(n), saturated(n);
+  for (int y0 = 0; y0 < size.height; y0 += band_rows) {
+    const int rows = std::min(band_rows, size.height - y0);
+    parallel_chunks(n, threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        Frame frame = images.frames[i];
+        readers[i]->read(y0, rows, frame.image);
+        convert(frame, &grey[i], &saturated[i]);
+      }
+    });
+    median_image(grey, threads).copyTo(views.median.rowRange(y0, y0 + rows));
+    max_image(grey).copyTo(views.maximum.rowRange(y0, y0 + rows));
+  }
+  return views;
+}
+
+cv::Mat median_image(const std::vector<cv::Mat>& images, int threads) {
   if (images.empty()) fail("median_image: no images");
   const cv::Size size = images.front().size();
   cv::Mat median(size, CV_32FC1);
   const std::size_t n = images.size();
-  parallel_chunks(static_cast<std::size_t>(size.height), 0,
+  parallel_chunks(static_cast<std::size_t>(size.height), threads,
                   [&](std::size_t, std::size_t begin, std::size_t end) {
                     std::vector<float> values(n);
                     for (std::size_t r = begin; r < end; ++r) {

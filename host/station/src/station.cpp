@@ -462,7 +462,7 @@ fs::path Station::existing_stack(const std::string& name) const {
 }
 
 nlohmann::json Station::sphere(const std::string& name) const {
-  const calibration::CalibrationImages images = calibration::load_calibration_images(existing_stack(name));
+  const calibration::CalibrationImages images = calibration::load_calibration_index(existing_stack(name));
   nlohmann::json j = {{"stack", name},
                       {"width", images.width()},
                       {"height", images.height()},
@@ -470,7 +470,9 @@ nlohmann::json Station::sphere(const std::string& name) const {
                       {"error", ""}};
   j["drawn"] = drawn_here(folder("stacks", name), options_.data / ".station" / "spheres" / (name + ".json"));
   try {
-    const auto circles = calibration::find_sphere_circles(images, calibration::LightCalibrationOptions{});
+    const calibration::LightCalibrationOptions defaults;
+    const cv::Mat median = images.mask.empty() ? calibration::calibration_views(images).median : cv::Mat();
+    const auto circles = calibration::find_sphere_circles(images, median, defaults);
     const calibration::ImageCircle& c = circles.front();
     j["circle"] = {{"x_px", c.centre_px.x()},
                    {"y_px", c.centre_px.y()},
@@ -484,8 +486,8 @@ nlohmann::json Station::sphere(const std::string& name) const {
 }
 
 std::string Station::sphere_png(const std::string& name) const {
-  const calibration::CalibrationImages images = calibration::load_calibration_images(existing_stack(name));
-  cv::Mat brightest = calibration::max_image(images.grey);
+  const calibration::CalibrationImages images = calibration::load_calibration_index(existing_stack(name));
+  const cv::Mat brightest = calibration::calibration_views(images).maximum;
   // A square root lifts the dim rim of a chrome sphere in a dark dome out of the black.
   cv::Mat lifted;
   cv::sqrt(cv::max(brightest, 0.0), lifted);

@@ -58,9 +58,10 @@ struct LightCalibrationRun {
 };
 
 // The spheres of one stack as the calibration finds them: the given circles,
-// else its mask.png's, else detected on the median of its images; left to
-// right. Throws InputError naming the stack when they cannot be found.
-std::vector<ImageCircle> find_sphere_circles(const CalibrationImages& images,
+// else its mask.png's, else detected on `median`, the median of its images
+// (calibration_views); left to right. Throws InputError naming the stack when
+// they cannot be found.
+std::vector<ImageCircle> find_sphere_circles(const CalibrationImages& images, const cv::Mat& median,
                                              const LightCalibrationOptions& options);
 
 // Throws InputError naming the stack and images when a sphere cannot be
