@@ -23,13 +23,19 @@ nlohmann::json read_json(const std::filesystem::path& path) {
   return nlohmann::json::parse(in);
 }
 
+// The chrome probe simulated `side` pixels square into DIR/chrome, calibrated into DIR/cal against
+// the simulator's lights: the calibration's run.
+testing::RunResult calibrate_chrome_probe(const std::filesystem::path& dir, const std::string& side) {
+  const auto simulated = run_lightstage({"simulate", "--quiet", "--scene", "chrome-probe", "--width", side,
+                                         "--height", side, "--out", (dir / "chrome").string()});
+  EXPECT_EQ(simulated.exit_code, 0) << simulated.err;
+  return run_lightstage({"calibrate", "lights", "--input", (dir / "chrome").string(), "--rig", "default",
+                         "--compare", (dir / "chrome").string(), "--out", (dir / "cal").string(), "--json"});
+}
+
 TEST(CalibrateCli, ChromeSphereToCalibrationToNearLightSolve) {
   const auto dir = testing::scratch_dir();
-  auto run = run_lightstage(
-      {"simulate", "--scene", "chrome-probe", "--width", "256", "--out", (dir / "chrome").string()});
-  ASSERT_EQ(run.exit_code, 0) << run.err;
-  run = run_lightstage({"calibrate", "lights", "--input", (dir / "chrome").string(), "--rig", "default",
-                        "--compare", (dir / "chrome").string(), "--out", (dir / "cal").string(), "--json"});
+  auto run = calibrate_chrome_probe(dir, "256");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const auto summary = nlohmann::json::parse(run.out);
   EXPECT_EQ(summary["measured"], 96);
@@ -60,11 +66,7 @@ TEST(CalibrateCli, AChromeStackIsNeverHeldWhole) {
   LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("CalibrationImages (the views and regions equal the whole stack's)");
   const auto dir = testing::scratch_dir();
   // 96 frames of 1024x1024 with a sphere of 400 px radius: 503 MB as grey floats and clipping flags.
-  auto run = run_lightstage({"simulate", "--quiet", "--scene", "chrome-probe", "--width", "1024", "--height",
-                             "1024", "--out", (dir / "chrome").string()});
-  ASSERT_EQ(run.exit_code, 0) << run.err;
-  run = run_lightstage({"calibrate", "lights", "--input", (dir / "chrome").string(), "--rig", "default",
-                        "--compare", (dir / "chrome").string(), "--out", (dir / "cal").string(), "--json"});
+  const auto run = calibrate_chrome_probe(dir, "1024");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const auto summary = nlohmann::json::parse(run.out);
   EXPECT_EQ(summary["measured"], 96);
