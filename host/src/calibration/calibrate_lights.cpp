@@ -24,14 +24,6 @@ struct StackSpheres {
   std::vector<std::size_t> spheres;  // indices into LightCalibration::spheres
 };
 
-// The pixels find_highlight looks at on `circle`, within the image.
-cv::Rect highlight_region(const ImageCircle& circle, cv::Size size) {
-  const int x0 = static_cast<int>(std::floor(circle.centre_px.x() - circle.radius_px)) - 1;
-  const int y0 = static_cast<int>(std::floor(circle.centre_px.y() - circle.radius_px)) - 1;
-  const int side = static_cast<int>(std::ceil(2 * circle.radius_px)) + 3;
-  return cv::Rect(x0, y0, side, side) & cv::Rect(cv::Point(0, 0), size);
-}
-
 CameraGeometry choose_camera(const LightCalibrationOptions& options, const CalibrationImages& images,
                              const std::optional<Rig>& rig) {
   if (options.camera) return *options.camera;
@@ -214,24 +206,26 @@ LightCalibrationRun calibrate_lights(const LightCalibrationOptions& options) {
   for (const auto& stack : stacks) {
     const cv::Mat background = stack.median(stack.region);
     const Vec2 origin(stack.region.x, stack.region.y);
+    std::vector<ImageCircle> circles;  // each sphere's outline in the region's pixels
+    for (const std::size_t sphere : stack.spheres) {
+      circles.push_back(cal.spheres[sphere].sphere.circle);
+      circles.back().centre_px -= origin;
+    }
     // found[k][i]: the stack's sphere k in image i. Each image is decoded once, around the spheres only.
     std::vector<std::vector<SphereObservation>> found(stack.spheres.size(),
                                                       std::vector<SphereObservation>(lights));
-    for_each_calibration_image(stack.images, stack.region, options.threads,
-                               [&](std::size_t i, const cv::Mat& grey, const cv::Mat& saturated) {
-                                 for (std::size_t k = 0; k < stack.spheres.size(); ++k) {
-                                   const MirrorSphere& sphere = cal.spheres[stack.spheres[k]].sphere;
-                                   ImageCircle circle = sphere.circle;  // in the region's pixels
-                                   circle.centre_px -= origin;
-                                   SphereObservation& o = found[k][i];
-                                   o.sphere = stack.spheres[k];
-                                   o.highlight =
-                                       find_highlight(grey, background, saturated, circle, options.highlight);
-                                   o.highlight.centre_px += origin;
-                                   if (o.highlight.usable())
-                                     o.reflection = reflect_at(sphere, cal.camera, o.highlight.centre_px);
-                                 }
-                               });
+    for_each_calibration_image(
+        stack.images, stack.region, options.threads,
+        [&](std::size_t i, const cv::Mat& grey, const cv::Mat& saturated) {
+          for (std::size_t k = 0; k < stack.spheres.size(); ++k) {
+            SphereObservation& o = found[k][i];
+            o.sphere = stack.spheres[k];
+            o.highlight = find_highlight(grey, background, saturated, circles[k], options.highlight);
+            o.highlight.centre_px += origin;
+            if (o.highlight.usable())
+              o.reflection = reflect_at(cal.spheres[o.sphere].sphere, cal.camera, o.highlight.centre_px);
+          }
+        });
     for (std::size_t k = 0; k < stack.spheres.size(); ++k) {
       for (std::size_t i = 0; i < lights; ++i) {
         const Highlight& h = found[k][i].highlight;

@@ -151,14 +151,17 @@ nlohmann::json Highlight::to_json() const {
   return j;
 }
 
-Highlight find_highlight(const cv::Mat& grey, const cv::Mat& background, const cv::Mat& saturated,
-                         const ImageCircle& circle, const HighlightOptions& options) {
-  Highlight result;
-  const cv::Rect image_rect(0, 0, grey.cols, grey.rows);
+cv::Rect highlight_region(const ImageCircle& circle, cv::Size size) {
   const int x0 = static_cast<int>(std::floor(circle.centre_px.x() - circle.radius_px)) - 1;
   const int y0 = static_cast<int>(std::floor(circle.centre_px.y() - circle.radius_px)) - 1;
   const int side = static_cast<int>(std::ceil(2 * circle.radius_px)) + 3;
-  const cv::Rect roi = cv::Rect(x0, y0, side, side) & image_rect;
+  return cv::Rect(x0, y0, side, side) & cv::Rect(cv::Point(0, 0), size);
+}
+
+Highlight find_highlight(const cv::Mat& grey, const cv::Mat& background, const cv::Mat& saturated,
+                         const ImageCircle& circle, const HighlightOptions& options) {
+  Highlight result;
+  const cv::Rect roi = highlight_region(circle, grey.size());
   if (roi.empty()) {
     result.note = "the sphere lies outside the image";
     return result;

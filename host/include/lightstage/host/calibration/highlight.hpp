@@ -57,6 +57,10 @@ struct Highlight {
   nlohmann::json to_json() const;
 };
 
+// The pixels of an image of `size` that find_highlight looks at for `circle`:
+// the circle's bounding square with a pixel's margin, cut to the image.
+cv::Rect highlight_region(const ImageCircle& circle, cv::Size size);
+
 // Finds the highlight in `grey` (CV_32FC1) inside `circle`, with `background`
 // (the median image) subtracted and `saturated` (CV_8UC1) flagging clipped pixels.
 Highlight find_highlight(const cv::Mat& grey, const cv::Mat& background, const cv::Mat& saturated,
