@@ -26,8 +26,24 @@ jobs=${LIGHTSTAGE_JOBS:-$(nproc)}
 # Each stage's wall time, so a CI log shows where the 90 minutes go.
 started=$SECONDS
 stage() { echo "=== $1 (at $((SECONDS - started)) s) ==="; }
+# The name and the last 40 output lines of every test a ctest log marks as failed. With -j
+# a test's output follows its result line, up to the next result or start line.
+failed_tests_output() {
+  awk -v flavour="$1" '
+    function flush() { if (name != "") { print "--- " flavour ": " name; n = count < 40 ? count : 40;
+                       for (i = count - n + 1; i <= count; i++) print lines[i % 40] } name = "" }
+    /^ *[0-9]+\/[0-9]+ Test +#[0-9]+: / { flush()
+      if ($0 ~ /\*\*\*|Failed|Timeout|Exception|Not Run/ && $0 !~ /Passed/) {
+        name = $0; sub(/^ *[0-9]+\/[0-9]+ Test +#[0-9]+: /, "", name); count = 0 }
+      next }
+    /^ +Start +[0-9]+: / { flush(); next }
+    /^[0-9]+% tests passed/ { flush(); next }
+    name != "" { count++; lines[count % 40] = $0 }
+    END { flush() }' "$2"
+}
 passed=0
 failed=0
+failures=""
 for flavour in $flavours; do
   stage "$flavour: build"
   "$root/scripts/build.sh" "$flavour"
@@ -53,8 +69,16 @@ for flavour in $flavours; do
   fi
   passed=$((passed + total - bad))
   failed=$((failed + bad))
+  if [ "$bad" -gt 0 ]; then
+    failures+=$(failed_tests_output "$flavour" "$log")$'\n'
+  fi
 done
 echo
+# CI keeps only the end of its log: repeat what each failed test printed here.
+if [ -n "$failures" ]; then
+  echo "=== failed tests, with the last lines each printed ==="
+  echo "$failures"
+fi
 echo "all flavours ($flavours), $((SECONDS - started)) s:"
 echo "tests: $passed passed, $failed failed"
 [ "$failed" -eq 0 ]
