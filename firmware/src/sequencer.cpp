@@ -185,7 +185,11 @@ class SequenceRun {
         continue;
       }
       if (now >= forced_off_ns_ && forced_off_ns_ < deadline_ns) return Wake::kForcedOff;
-      if (now >= deadline_ns) return Wake::kDeadline;
+      if (now >= deadline_ns) {
+        // Woken late, the strobe may have fallen in time with its edge still queued.
+        if (watch_strobe && strobe_fell_by(deadline_ns)) return Wake::kStrobeFall;
+        return Wake::kDeadline;
+      }
       const std::int64_t next =
           std::min({deadline_ns, forced_off_ns_, trigger_end_ns_, now + Sequencer::kStopPollNs});
       if (!watch_strobe) {
@@ -193,22 +197,34 @@ class SequenceRun {
         continue;
       }
       const auto edge = strobe_->wait_until(next);
-      if (!edge || edge->t_ns < exposure_start_ns_) continue;  // an edge from before this exposure
-      if (edge->rising) {
-        if (event_.strobe_rise_ns() == 0) event_.set_strobe_rise_ns(edge->t_ns);
-      } else {
-        event_.set_strobe_fall_ns(edge->t_ns);
-        return Wake::kStrobeFall;
-      }
+      if (edge && note_strobe_edge(*edge)) return Wake::kStrobeFall;
     }
   }
 
-  void collect_strobe_edges() {
-    while (const auto edge = strobe_->wait_until(0)) {
-      if (edge->t_ns < exposure_start_ns_) continue;
-      if (edge->rising && event_.strobe_rise_ns() == 0) event_.set_strobe_rise_ns(edge->t_ns);
-      if (!edge->rising) event_.set_strobe_fall_ns(edge->t_ns);
+  // Records an edge of this exposure (its first rise, its fall; earlier edges are ignored):
+  // true for a fall.
+  bool note_strobe_edge(const gpio::EdgeEvent& edge) {
+    if (edge.t_ns < exposure_start_ns_) return false;
+    if (edge.rising) {
+      if (event_.strobe_rise_ns() == 0) event_.set_strobe_rise_ns(edge.t_ns);
+      return false;
     }
+    event_.set_strobe_fall_ns(edge.t_ns);
+    return true;
+  }
+
+  // Whether the edges that happened by now hold a fall at or before `deadline_ns`.
+  bool strobe_fell_by(std::int64_t deadline_ns) {
+    strobe_->catch_up();
+    while (const auto edge = strobe_->wait_until(0)) {
+      if (edge->t_ns > deadline_ns) return false;
+      if (note_strobe_edge(*edge)) return true;
+    }
+    return false;
+  }
+
+  void collect_strobe_edges() {
+    while (const auto edge = strobe_->wait_until(0)) note_strobe_edge(*edge);
   }
 
   void release_trigger(std::int64_t now) {

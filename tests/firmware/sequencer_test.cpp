@@ -136,6 +136,32 @@ TEST(Sequencer, ClosedLoopKeepsTheLedLitUntilTheStrobeEnds) {
   EXPECT_EQ(bench.events[1].planned_start_ns(), bench.events[0].strobe_fall_ns() + 500 * kUs);
 }
 
+// A controller that wakes after the strobe timeout (a busy board) finds the camera's falling edge
+// already queued with its time: within the timeout it ends the exposure, after it the step fails.
+TEST(Sequencer, AStrobeThatFellInTimeCountsWhenTheControllerWakesLate) {
+  const auto run = [](std::int64_t exposure_us) {
+    Bench bench({kTrigger, kStrobe, 80 * kUs, exposure_us * kUs, false});
+    // Every wake-up later than the whole timeout: the one after the rising edge is past it.
+    bench.clock.set_oversleep(3500 * kUs);
+    const proto::Sequence sequence = testing::one_led_per_step(
+        7, {1},
+        {.leds = {}, .settle_us = 100, .exposure_us = 0, .wait_strobe = true, .strobe_timeout_us = 3200});
+    const proto::SequenceDone done = bench.run(sequence);
+    EXPECT_EQ(bench.events.size(), 1u);
+    EXPECT_TRUE(bench.all_dark());
+    return std::pair{done, bench.events.empty() ? proto::StepEvent() : bench.events[0]};
+  };
+  const auto [in_time, event] = run(3000);
+  EXPECT_EQ(in_time.outcome(), proto::OK) << in_time.detail();
+  EXPECT_EQ(event.strobe_fall_ns(), event.trigger_ns() + 3080 * kUs);
+  EXPECT_GE(event.leds_off_ns(), event.strobe_fall_ns());
+  EXPECT_GT(event.lateness_ns(), 0) << "the late wake-up is reported";
+
+  const auto [too_late, late_event] = run(3150);  // falls 30 us after the timeout
+  EXPECT_EQ(too_late.outcome(), proto::STROBE_TIMEOUT);
+  EXPECT_THAT(late_event.detail(), HasSubstr("no strobe"));
+}
+
 TEST(Sequencer, AMissingStrobeAbortsTheStepWithTheLedsOff) {
   Bench bench({kTrigger, kStrobe, 0, 0, /*lost=*/true});
   const proto::Sequence sequence = testing::one_led_per_step(

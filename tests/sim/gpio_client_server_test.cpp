@@ -194,6 +194,32 @@ TEST_F(SimServerTest, DrainDropsQueuedEdges) {
   EXPECT_FALSE(strobe->wait_until(monotonic_now_ns() + 20 * kMs).has_value());
 }
 
+// What a kernel queue gives a reader that wakes late: after catch_up() every edge already due is
+// there to read at once, in order, however late the sim's strobe clock runs.
+TEST_F(SimServerTest, CatchingUpBringsEveryEdgeAlreadyDue) {
+  start();
+  const auto gpio = connect_sim_chip(address);
+  const std::vector<unsigned> trigger_line = {100};
+  auto trigger = gpio->request_outputs(trigger_line, {}, {}, "fw");
+  auto strobe = gpio->request_edges(101, false, "fw");
+  for (int round = 0; round < 20; ++round) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));  // past the last round's exposure
+    const std::int64_t t0 = monotonic_now_ns() - 50 * kMs;       // this one ended 43 ms ago
+    trigger->set(std::vector<int>{1}, t0);
+    trigger->set(std::vector<int>{0}, t0 + 1'000);
+    strobe->catch_up();
+    const auto rise = strobe->wait_until(0);
+    const auto fall = strobe->wait_until(0);
+    ASSERT_TRUE(rise && fall) << "round " << round;
+    EXPECT_TRUE(rise->rising);
+    EXPECT_EQ(rise->t_ns, t0 + 2 * kMs);
+    EXPECT_FALSE(fall->rising);
+    EXPECT_EQ(fall->t_ns, t0 + 7 * kMs);
+    strobe->catch_up();
+    EXPECT_FALSE(strobe->wait_until(0).has_value());
+  }
+}
+
 TEST_F(SimServerTest, ARunTimeLoseStrobeFaultLeavesTheWaitEmpty) {
   start();
   inject_sim_fault(address, "lose-strobe:1");

@@ -118,6 +118,9 @@ void GpioService::serve(std::unique_ptr<ByteLink> link, std::stop_token stop) {
 }
 
 void GpioService::handle(ClientId client, const pb::ClientMessage& message, pb::ServerMessage& reply) {
+  // Edges due by now go out before this answer, as a kernel would have queued them already even
+  // when the strobe clock's thread runs late: a client's round trip sees every edge up to it.
+  deliver_due_strobes();
   try {
     switch (message.body_case()) {
       case pb::ClientMessage::kChipInfo: {
@@ -195,6 +198,11 @@ void GpioService::deliver(const std::vector<EdgeNotice>& notices) {
   }
 }
 
+void GpioService::deliver_due_strobes() {
+  const std::lock_guard lock(due_mutex_);
+  deliver(chip_->run_due(monotonic_now_ns()));
+}
+
 void GpioService::wake_strobe_clock() {
   {
     const std::lock_guard lock(wake_mutex_);
@@ -219,7 +227,7 @@ void GpioService::run_strobe_clock(std::stop_token stop) {
       woken_ = false;
     }
     if (stop.stop_requested()) break;
-    deliver(chip_->run_due(monotonic_now_ns()));
+    deliver_due_strobes();
   }
 }
 

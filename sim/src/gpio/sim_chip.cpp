@@ -45,9 +45,7 @@ class SimConnection {
     // sent before, so the last changes (all LEDs off on exit) are recorded
     // even on links that drop unread data at close.
     try {
-      pb::ClientMessage sync;
-      sync.mutable_chip_info();
-      call(sync, std::chrono::seconds(1));
+      round_trip(std::chrono::seconds(1));
     } catch (const std::exception&) {
       // Gone already: nothing more to flush.
     }
@@ -82,6 +80,14 @@ class SimConnection {
     replies_.erase(it);
     if (reply.has_error()) throw GpioError(fmt::format("{}: {}", uri_, reply.error().message()));
     return reply;
+  }
+
+  // A request answered only after the sim has applied everything sent before and sent every
+  // edge due by the time it reads it.
+  void round_trip(std::chrono::milliseconds timeout = kAnswerTimeout) {
+    pb::ClientMessage sync;
+    sync.mutable_chip_info();
+    call(sync, timeout);
   }
 
   // Sends without waiting; a later error answer is thrown by the next call.
@@ -257,6 +263,7 @@ class SimEdgeInput final : public lightstage::gpio::EdgeInput {
     return connection_->wait_edge(offset_, deadline_ns);
   }
   void drain() override { connection_->drain(offset_); }
+  void catch_up() override { connection_->round_trip(); }
 
  private:
   std::shared_ptr<SimConnection> connection_;

@@ -52,6 +52,10 @@ class EdgeInput {
   virtual std::optional<EdgeEvent> wait_until(std::int64_t deadline_ns) = 0;
   // Drops edges already queued (before a new exposure).
   virtual void drain() = 0;
+  // Makes every edge that has happened by now readable, so a reader that woke late can still
+  // see the ones that came in time. The kernel queues edges as they happen (nothing to do);
+  // the sim sends them over a socket and answers a round trip only after every edge due by then.
+  virtual void catch_up() {}
 };
 
 class Chip {

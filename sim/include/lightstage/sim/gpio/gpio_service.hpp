@@ -47,6 +47,8 @@ class GpioService final : public ConnectionService {
 
   void handle(ClientId client, const proto::sim::ClientMessage& message, proto::sim::ServerMessage& reply);
   void deliver(const std::vector<EdgeNotice>& notices);
+  // Sends the strobe edges whose time has come, in time order whoever calls it.
+  void deliver_due_strobes();
   void wake_strobe_clock();
   void run_strobe_clock(std::stop_token stop);
 
@@ -55,6 +57,7 @@ class GpioService final : public ConnectionService {
   std::map<ClientId, std::shared_ptr<MessageChannel>> clients_;
   std::mutex drop_mutex_;
   DropFault drop_;
+  std::mutex due_mutex_;
   std::mutex wake_mutex_;
   std::condition_variable_any wake_;
   bool woken_ = false;
