@@ -10,7 +10,7 @@
 #include "lightstage/host/io/raw_image.hpp"
 #include "lightstage/host/io/tiff_image.hpp"
 
-#include <unistd.h>
+#include "fuzz_scratch.hpp"
 
 #include <cstddef>
 #include <cstdint>
@@ -25,8 +25,7 @@ namespace {
 constexpr int kMaxFuzzedPixels = 2048 * 2048;
 
 std::filesystem::path scratch(const char* extension) {
-  return std::filesystem::temp_directory_path() /
-         ("lightstage-fuzz-camera-" + std::to_string(getpid()) + extension);
+  return lightstage::fuzzing::scratch_dir() / (std::string("camera") + extension);
 }
 
 }  // namespace

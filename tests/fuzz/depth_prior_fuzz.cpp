@@ -7,7 +7,7 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/surface/depth_prior.hpp"
 
-#include <unistd.h>
+#include "fuzz_scratch.hpp"
 
 #include <cstddef>
 #include <cstdint>
@@ -19,8 +19,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size < 1) return 0;
   static const char* const kExtensions[] = {".png", ".pfm", ".ply", ".exr"};
   const char* ext = kExtensions[data[0] % 4];
-  const std::filesystem::path path =
-      std::filesystem::temp_directory_path() / ("lightstage-fuzz-depth-" + std::to_string(getpid()) + ext);
+  const std::filesystem::path path = lightstage::fuzzing::scratch_dir() / (std::string("depth") + ext);
   {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(data + 1), static_cast<std::streamsize>(size - 1));

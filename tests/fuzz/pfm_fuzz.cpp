@@ -3,7 +3,7 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/pfm.hpp"
 
-#include <unistd.h>
+#include "fuzz_scratch.hpp"
 
 #include <cstddef>
 #include <cstdint>
@@ -12,8 +12,7 @@
 #include <string>
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static const std::filesystem::path path =
-      std::filesystem::temp_directory_path() / ("lightstage-fuzz-pfm-" + std::to_string(getpid()) + ".pfm");
+  static const std::filesystem::path path = lightstage::fuzzing::scratch_dir() / "input.pfm";
   {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));

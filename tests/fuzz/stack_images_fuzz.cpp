@@ -8,7 +8,8 @@
 #include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/io/stack_io.hpp"
 
-#include <unistd.h>
+#include "fuzz_scratch.hpp"
+
 #include <opencv2/imgcodecs.hpp>
 
 #include <cstddef>
@@ -47,8 +48,7 @@ void write_base_stack(const fs::path& dir, const std::string& extension) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;
-  static const fs::path root =
-      fs::temp_directory_path() / ("lightstage-fuzz-images-" + std::to_string(getpid()));
+  static const fs::path root = lightstage::fuzzing::scratch_dir();
   const std::string bytes(reinterpret_cast<const char*>(data + 1), size - 1);
   const int choice = data[0] % 3;
   const fs::path dir = root / (choice == 2 ? "pfm" : "png");

@@ -5,7 +5,8 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/stack_io.hpp"
 
-#include <unistd.h>
+#include "fuzz_scratch.hpp"
+
 #include <opencv2/imgcodecs.hpp>
 
 #include <array>
@@ -43,8 +44,7 @@ void write_base_stack(const std::filesystem::path& dir) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;
-  static const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("lightstage-fuzz-stack-" + std::to_string(getpid()));
+  static const std::filesystem::path dir = lightstage::fuzzing::scratch_dir() / "stack";
   write_base_stack(dir);
   write(dir / kFiles[data[0] % kFiles.size()],
         std::string(reinterpret_cast<const char*>(data + 1), size - 1));
