@@ -9,13 +9,20 @@ void near_light_directions(const NearLights& near, std::size_t pixel, Eigen::Mat
   const Eigen::Index n = near.led_positions_mm.rows();
   directions.resize(n, 3);
   gains.resize(n);
-  const Eigen::RowVector3d x = near.points_mm.row(static_cast<Eigen::Index>(pixel));
+  const Eigen::MatrixX3d& leds = near.led_positions_mm;
+  const Eigen::Index row = static_cast<Eigen::Index>(pixel);
+  const double x = near.points_mm(row, 0), y = near.points_mm(row, 1), z = near.points_mm(row, 2);
+  const Eigen::Vector3d& c = near.object_centre_mm;
+  // Squared distances throughout: one square root a light (this runs for every pixel and light).
   for (Eigen::Index j = 0; j < n; ++j) {
-    const Eigen::RowVector3d to_led = near.led_positions_mm.row(j) - x;
-    const double d = to_led.norm();
-    const double d0 = (near.led_positions_mm.row(j) - near.object_centre_mm.transpose()).norm();
-    directions.row(j) = to_led / d;
-    gains(j) = (d0 * d0) / (d * d);
+    const double dx = leds(j, 0) - x, dy = leds(j, 1) - y, dz = leds(j, 2) - z;
+    const double cx = leds(j, 0) - c.x(), cy = leds(j, 1) - c.y(), cz = leds(j, 2) - c.z();
+    const double d2 = dx * dx + dy * dy + dz * dz;
+    const double inverse_d = 1.0 / std::sqrt(d2);
+    directions(j, 0) = dx * inverse_d;
+    directions(j, 1) = dy * inverse_d;
+    directions(j, 2) = dz * inverse_d;
+    gains(j) = (cx * cx + cy * cy + cz * cz) / d2;
   }
 }
 

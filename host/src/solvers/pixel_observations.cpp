@@ -34,10 +34,9 @@ void load_pixel(const Observations& observations, std::size_t pixel, bool drop_s
   const Eigen::Index images = observations.intensities.cols();
   out.values = observations.intensities.row(row).transpose().cast<double>();
   if (observations.near) {
-    Eigen::VectorXd gains;
-    near_light_directions(*observations.near, pixel, out.lights, gains);
+    near_light_directions(*observations.near, pixel, out.lights, out.near_gains);
     // The LED is brighter (gain > 1) when closer: divide to get the value at unit light.
-    out.values = out.values.cwiseQuotient(gains);
+    out.values = out.values.cwiseQuotient(out.near_gains);
   } else {
     out.lights = observations.lights;
   }

@@ -20,6 +20,7 @@ struct PixelObservations {
   Eigen::MatrixX3d lights;           // images × 3, unit, object -> light
   Eigen::VectorXd values;            // images, linear value at unit light
   std::vector<std::uint8_t> usable;  // images, 1 = finite and (unless kept) not saturated
+  Eigen::VectorXd near_gains;        // images, the near lights' falloff the values were divided by
 
   Eigen::Index count() const { return values.size(); }
 };
