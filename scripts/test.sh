@@ -33,7 +33,7 @@ failed_tests_output() {
     function flush() { if (name != "") { print "--- " flavour ": " name; n = count < 40 ? count : 40;
                        for (i = count - n + 1; i <= count; i++) print lines[i % 40] } name = "" }
     /^ *[0-9]+\/[0-9]+ Test +#[0-9]+: / { flush()
-      if ($0 ~ /\*\*\*|Failed|Timeout|Exception|Not Run/ && $0 !~ /Passed/) {
+      if ($0 ~ /\*\*\*|Failed|Timeout|Exception|Not Run/ && $0 !~ /Passed|Skipped/) {
         name = $0; sub(/^ *[0-9]+\/[0-9]+ Test +#[0-9]+: /, "", name); count = 0 }
       next }
     /^ +Start +[0-9]+: / { flush(); next }

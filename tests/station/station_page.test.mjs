@@ -189,13 +189,18 @@ test('an operator runs the simulated dome from the page, calibration to report',
     await page.waitForFunction(() => document.querySelector('input[data-place="object"]').checked);
     await page.fill('#capture-name', 'bunny');
     await startJob(page, () => page.click('#capture-start'));
-    // Paused part way, then resumed from the stack list.
+    // Paused part way, then resumed from the stack list. Stopped at the first frame shown: the
+    // simulated dome takes the 96 in a few seconds, and a loaded machine's page can lag that much.
     await page.waitForFunction(() => {
       const done = /(\d+) \/ 96 frames/.exec(document.querySelector('#job')?.textContent ?? '');
-      return done && Number(done[1]) >= 20;
+      return done && Number(done[1]) >= 1;
     }, null, { timeout: 60000 });
     await page.click('#job-stop');
-    await page.waitForFunction(() => document.querySelector('#job-state')?.textContent === 'stopped', null, { timeout: 60000 });
+    await page.waitForFunction(() => {
+      const state = document.querySelector('#job-state')?.textContent;
+      return state && state !== 'running';
+    }, null, { timeout: 60000 });
+    assert.equal(await page.textContent('#job-state'), 'stopped', 'the capture ended before the stop reached it');
     await page.waitForSelector('#stacks tr[data-stack="bunny"] button.resume');
     assert.match(await page.textContent('#stacks tr[data-stack="bunny"]'), /incomplete/);
     await page.screenshot({ path: path.join(scratch, 'capture-paused.png'), fullPage: true });
