@@ -5,9 +5,9 @@
 // would (the shadow threshold estimated from the data: its clipped-noise
 // estimate is what takes every method here from degrees to tenths of one).
 // Every robust method must reach a few tenths of a degree, auto too, and the
-// default robust must stay within 1.3x of the family's best. (The issue asks
-// for a 10% lead over each; with the threshold right, sbl is 0.117 deg
-// against robust's 0.144 on the cast-shadow bunny: not met, docs/solvers.md.)
+// default robust must beat every member of the family. (The issue asks for a
+// 10% lead over each: met on the specular bunny, 6% on the cast-shadow one,
+// docs/solvers.md.)
 #include "lightstage/common/rig.hpp"
 #include "lightstage/host/eval/angular_error.hpp"
 #include "lightstage/host/radiometry.hpp"
@@ -67,12 +67,12 @@ TEST_P(RobustFamily, EveryRobustMethodReachesTenthsOfADegree) {
     // Every member of the family is itself robust: better than plain least squares.
     EXPECT_LT(errors[method], errors["l2"]) << method;
   }
-  EXPECT_LE(errors["robust"], 0.25);
+  EXPECT_LE(errors["robust"], 0.2);
   EXPECT_LE(errors["l1"], 0.3);
   EXPECT_LE(errors["sbl"], 0.3);
   EXPECT_LE(errors["rpca"], 1.5);
   EXPECT_LE(errors["auto"], 0.5);
-  EXPECT_LE(errors["robust"], 1.3 * best);
+  EXPECT_LT(errors["robust"], best);
   EXPECT_LE(errors["robust"], 0.9 * errors["rpca"]);
 }
 

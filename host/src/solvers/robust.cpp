@@ -35,6 +35,8 @@ RobustEstimator parse_robust_estimator(const std::string& text) {
 void RobustOptions::check() const {
   detail::check_shadow_threshold("RobustOptions", shadow_threshold);
   if (!(t_low > 0 && t_low <= 1)) fail("RobustOptions.t_low (--t-low): must be in (0, 1], got {}", t_low);
+  if (!(inlier_sigmas >= 0 && std::isfinite(inlier_sigmas)))
+    fail("RobustOptions.inlier_sigmas: must be 0 (off) or positive, got {}", inlier_sigmas);
   if (irls_iterations < 1) fail("RobustOptions.irls_iterations: must be at least 1, got {}", irls_iterations);
   if (!(irls_epsilon > 0 && std::isfinite(irls_epsilon)))
     fail("RobustOptions.irls_epsilon: must be positive, got {}", irls_epsilon);
@@ -50,6 +52,7 @@ nlohmann::json RobustOptions::to_json() const {
   return {{"shadow_threshold", shadow_threshold},
           {"t_low", t_low},
           {"estimator", robust_estimator_name(estimator)},
+          {"inlier_sigmas", inlier_sigmas},
           {"irls_iterations", irls_iterations},
           {"irls_epsilon", irls_epsilon},
           {"ransac_iterations", ransac_iterations},
@@ -75,6 +78,20 @@ constexpr double kScreenRatio = 0.5;
 constexpr double kTerminator = 0.25;
 // The fraction of the lit values the consensus must explain for the screen to act.
 constexpr double kMinConsensus = 0.5;
+// Inlier refit: the median absolute residual over σ for Gaussian noise.
+constexpr double kMadToSigma = 1.4826;
+// ... the values T_low dropped join when their median standardised residual
+// is within this many of the selection's σ.
+constexpr double kExpandRatio = 3;
+// ... predictions below this share of the selection's median value count as
+// it in the noise model (dark values are no more certain than this).
+constexpr double kNoiseFloorShare = 0.3;
+// ... σ grows at most as shot noise does (√signal): a steeper growth measured
+// on one pixel's few values is mostly a lobe leaking into the selection.
+constexpr double kMaxNoisePower = 0.5;
+// ... too few values per half, or halves this close in signal: constant σ.
+constexpr std::size_t kMinHalf = 4;
+constexpr double kMinSignalRatio = 1.2;
 
 double median_of(const PixelObservations& pixel, const std::vector<Eigen::Index>& kept,
                  std::vector<double>& scratch) {
@@ -159,6 +176,96 @@ bool ransac(const PixelObservations& pixel, const RobustOptions& options, std::s
   return true;
 }
 
+// The median of `values` (reordered; not empty).
+double median_in_place(std::vector<double>& values) {
+  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
+
+// How the pixel's noise grows with its signal, σ ∝ prediction^power: from
+// the fit's residuals on the darker and the brighter half of the selection
+// (ordered by prediction), power = log(residual ratio) / log(prediction
+// ratio), in [0, kMaxNoisePower]. Shot noise gives 1/2; a light model that
+// is off at grazing light (near lights on an assumed plane) gives 0.
+double noise_power(const PixelObservations& pixel, const Eigen::Vector3d& s, double floor,
+                   RobustWorkspace& ws) {
+  auto& pairs = ws.predicted_residuals;
+  pairs.clear();
+  for (const Eigen::Index j : ws.kept) {
+    const double predicted = pixel.lights.row(j).dot(s);
+    pairs.emplace_back(std::max(predicted, floor), std::abs(predicted - pixel.values(j)));
+  }
+  const std::size_t half = pairs.size() / 2;
+  if (half < kMinHalf) return 0;
+  std::sort(pairs.begin(), pairs.end());
+  auto half_median = [&](bool bright, bool residual) {
+    ws.scratch.clear();
+    for (std::size_t i = bright ? half : 0; i < (bright ? pairs.size() : half); ++i)
+      ws.scratch.push_back(residual ? pairs[i].second : pairs[i].first);
+    return median_in_place(ws.scratch);
+  };
+  const double signal_ratio = half_median(true, false) / half_median(false, false);
+  const double noise_ratio = half_median(true, true) / half_median(false, true);
+  if (!(signal_ratio > kMinSignalRatio && noise_ratio > 0 && std::isfinite(noise_ratio))) return 0;
+  return std::clamp(std::log(noise_ratio) / std::log(signal_ratio), 0.0, kMaxNoisePower);
+}
+
+// The estimator found the outliers; least squares is the efficient fit to
+// the rest. Every observation the robust fit explains to within
+// inlier_sigmas noise deviations (σ from the selection's residuals, scaled by
+// noise_power) is refitted by weighted least squares (weights 1/σ²). The
+// values T_low dropped join when the fit explains them about as well as the
+// selection (a Lambertian pixel: twice the data); where they stray (a broad
+// lobe), only the selection is refitted.
+void refit_inliers(const PixelObservations& pixel, const RobustOptions& options, double scale,
+                   RobustWorkspace& ws, Eigen::Vector3d& s) {
+  const double floor = kNoiseFloorShare * scale;
+  const double power = noise_power(pixel, s, floor, ws);
+  auto deviation = [&](Eigen::Index j) {  // relative to the scale's
+    return std::pow(std::max(pixel.lights.row(j).dot(s), floor) / scale, power);
+  };
+  auto standardised = [&](Eigen::Index j) {
+    return std::abs(pixel.lights.row(j).dot(s) - pixel.values(j)) / deviation(j);
+  };
+  ws.scratch.clear();
+  for (const Eigen::Index j : ws.kept) ws.scratch.push_back(standardised(j));
+  const double sigma = kMadToSigma * median_in_place(ws.scratch);
+  if (!(sigma > 0)) return;
+
+  ws.in_selection.assign(static_cast<std::size_t>(pixel.count()), 0);
+  for (const Eigen::Index j : ws.kept) ws.in_selection[static_cast<std::size_t>(j)] = 1;
+  auto lit = [&](Eigen::Index j) {
+    return pixel.usable[static_cast<std::size_t>(j)] && pixel.values(j) > options.shadow_threshold;
+  };
+  ws.scratch.clear();
+  for (Eigen::Index j = 0; j < pixel.count(); ++j) {
+    if (lit(j) && !ws.in_selection[static_cast<std::size_t>(j)]) ws.scratch.push_back(standardised(j));
+  }
+  const bool expand = ws.scratch.empty() || kMadToSigma * median_in_place(ws.scratch) <= kExpandRatio * sigma;
+
+  const double band = options.inlier_sigmas * sigma;
+  std::size_t previous = 0;
+  for (int round = 0; round < kRefitRounds; ++round) {
+    ws.inliers.clear();
+    ws.weights.setZero(pixel.count());
+    for (Eigen::Index j = 0; j < pixel.count(); ++j) {
+      if (!lit(j) || (!expand && !ws.in_selection[static_cast<std::size_t>(j)])) continue;
+      const double d = deviation(j);
+      if (std::abs(pixel.lights.row(j).dot(s) - pixel.values(j)) < band * d) {
+        ws.inliers.push_back(j);
+        ws.weights(j) = 1 / (d * d);
+      }
+    }
+    if (static_cast<int>(ws.inliers.size()) < options.min_observations || ws.inliers.size() == previous)
+      break;
+    previous = ws.inliers.size();
+    Eigen::Vector3d refit;
+    if (!detail::lambert_fit(pixel.lights, pixel.values, ws.inliers, refit, &ws.weights)) break;
+    s = refit;
+  }
+}
+
 }  // namespace
 
 RobustPixelFit fit_robust_pixel(const PixelObservations& pixel, const RobustOptions& options,
@@ -216,6 +323,7 @@ RobustPixelFit fit_robust_pixel(const PixelObservations& pixel, const RobustOpti
       break;
   }
   if (!s.allFinite() || s.norm() < 1e-12) return fit;
+  if (options.inlier_sigmas > 0) refit_inliers(pixel, options, scale, ws, s);
   double squared = 0;
   std::size_t inside = 0;
   for (const Eigen::Index j : ws.kept) {

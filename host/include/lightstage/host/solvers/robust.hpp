@@ -19,7 +19,12 @@
 //       probability 0.999), then least squares on its inliers, re-taken from
 //       each refit; the random sequence is seeded per pixel, so results do
 //       not depend on the thread count;
-//     - none: least squares on the selection.
+//     - none: least squares on the selection;
+//  5. inlier refit (inlier_sigmas > 0, default 3): the estimator's fit
+//     measures the pixel's noise (σ from its residuals, growing with the
+//     signal up to shot noise's √); every lit value within inlier_sigmas σ
+//     of the fit — T_low's dropped values too, when the fit explains them
+//     about as well as the selection — is refitted by weighted least squares.
 // The screen is off by default: with the shadow threshold estimated from the
 // data it changes nothing on the cast-shadow bunnies and the DiLiGenT ball,
 // and costs accuracy on the material sweep (docs/solvers.md).
@@ -34,6 +39,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace lightstage {
@@ -49,6 +55,9 @@ struct RobustOptions {
   // Drop lit values well below a RANSAC consensus fit before the T_low
   // selection (cast shadows; docs/solvers.md "The robust family").
   bool screen_cast_shadows = false;
+  // Refit after the estimator: weighted least squares on the observations
+  // within this many noise deviations of its fit (0 = off; robust.cpp).
+  double inlier_sigmas = 3;
   int irls_iterations = 30;        // irls-l1: reweighting rounds
   double irls_epsilon = 1e-3;      // irls-l1: residual floor, relative to the median value
   int ransac_iterations = 200;     // ransac: triples tried
@@ -75,6 +84,8 @@ struct RobustWorkspace {
   std::vector<Eigen::Index> kept, inliers;
   Eigen::VectorXd weights;
   std::vector<double> scratch;
+  std::vector<std::pair<double, double>> predicted_residuals;
+  std::vector<std::uint8_t> in_selection;
 };
 
 // The per-pixel core; `pixel_index` seeds RANSAC.
