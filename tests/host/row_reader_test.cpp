@@ -18,9 +18,11 @@
 #include <csetjmp>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -273,6 +275,62 @@ TEST(HostRowReader, PngColourTypesAreTransformedAsReadImageTransformsThem) {
     // Only an interlaced PNG is decoded whole: its rows come out at the last pass.
     expect_bands_match(path, whole, c.spec.interlace != PNG_INTERLACE_NONE);
   }
+}
+
+// $TMPDIR set for one test, restored after it.
+class TemporaryFolder {
+ public:
+  explicit TemporaryFolder(const std::filesystem::path& dir) {
+    if (const char* old = std::getenv("TMPDIR")) old_ = old;
+    ::setenv("TMPDIR", dir.c_str(), 1);
+  }
+  ~TemporaryFolder() {
+    if (old_)
+      ::setenv("TMPDIR", old_->c_str(), 1);
+    else
+      ::unsetenv("TMPDIR");
+  }
+  TemporaryFolder(const TemporaryFolder&) = delete;
+  TemporaryFolder& operator=(const TemporaryFolder&) = delete;
+
+ private:
+  std::optional<std::string> old_;
+};
+
+// A file decoded whole keeps its rows in an unlinked file in $TMPDIR: the
+// bands are the image's, and nothing is left in the folder, even while open.
+TEST(HostRowReader, AFileDecodedWholeKeepsItsRowsInAnUnlinkedTemporaryFile) {
+  const auto dir = testing::scratch_dir();
+  const auto temporary = dir / "tmp";
+  std::filesystem::create_directories(temporary);
+  const TemporaryFolder scoped(temporary);
+  const cv::Mat image = random_image(CV_16UC1, 65536);
+  const auto path = dir / "adam7.png";
+  ASSERT_NO_FATAL_FAILURE(
+      write_png_file(path, kWidth, kHeight,
+                     {.colour = PNG_COLOR_TYPE_GRAY, .bit_depth = 16, .interlace = PNG_INTERLACE_ADAM7},
+                     png_bytes(image, 16)));
+  const auto reader = io::open_row_reader(path);
+  EXPECT_TRUE(reader->decoded_whole());
+  EXPECT_TRUE(std::filesystem::is_empty(temporary));
+  cv::Mat band;
+  reader->read(3, 5, band);
+  expect_same(band, image.rowRange(3, 8));
+  expect_bands_match(path, image, true);
+  EXPECT_TRUE(std::filesystem::is_empty(temporary));
+}
+
+// No temporary folder to keep the rows in: the error names the file and $TMPDIR.
+TEST(HostRowReader, AFileDecodedWholeWithoutATemporaryFolderSaysSo) {
+  const auto dir = testing::scratch_dir();
+  const TemporaryFolder scoped(dir / "missing");
+  const auto path = dir / "adam7.png";
+  ASSERT_NO_FATAL_FAILURE(write_png_file(path, kWidth, kHeight,
+                                         {.colour = PNG_COLOR_TYPE_GRAY, .interlace = PNG_INTERLACE_ADAM7},
+                                         png_bytes(random_image(CV_8UC1, 256), 8)));
+  const std::string error = error_of([&] { io::open_row_reader(path); });
+  EXPECT_THAT(error, HasSubstr(path.string()));
+  EXPECT_THAT(error, HasSubstr("TMPDIR"));
 }
 
 TEST(HostRowReader, PfmBandsEqualTheWholeImageInAnyOrder) {

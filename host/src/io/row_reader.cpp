@@ -71,19 +71,6 @@ class PfmRows final : public RowReader {
   std::ifstream in_;
 };
 
-// Files that decode only whole: decoded when opened and kept.
-class DecodedRows final : public RowReader {
- public:
-  DecodedRows(const std::filesystem::path& path, cv::Mat image)
-      : RowReader(path, image.size(), image.type()), image_(std::move(image)) {}
-  bool decoded_whole() const override { return true; }
-
- private:
-  void read_rows(int y0, int rows, cv::Mat& out) override { image_.rowRange(y0, y0 + rows).copyTo(out); }
-
-  cv::Mat image_;
-};
-
 std::unique_ptr<RowReader> open_pfm_rows(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) fail("{}: cannot open (no such file or not readable)", path.string());
@@ -115,7 +102,7 @@ std::unique_ptr<RowReader> open_row_reader(const std::filesystem::path& path) {
   if (!is_raw_file(path)) {
     if (auto png = open_png_rows(path)) return png;
   }
-  return std::make_unique<DecodedRows>(path, read_image(path));
+  return spill_decoded_rows(path, read_image(path));
 }
 
 }  // namespace lightstage::io

@@ -5,8 +5,9 @@
 // alpha dropped. PNG rows come through libpng, TIFF strips and tiles through
 // libtiff (a strip or a row of tiles is decoded once and kept until the bands
 // pass it), PFM rows by seeking to them. Camera RAW files and interlaced PNGs
-// cannot be decoded in part: they are decoded whole when opened and kept,
-// which costs one decoded frame per reader (decoded_whole() says so). Each
+// cannot be decoded in part: they are decoded whole when opened, their rows
+// kept in an unlinked temporary file ($TMPDIR) and read back by band
+// (decoded_whole() says so): disk, not memory, holds a stack of them. Each
 // reader holds its file open.
 
 #include <opencv2/core.hpp>

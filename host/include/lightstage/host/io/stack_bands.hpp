@@ -11,7 +11,8 @@
 // what load_stack gives: the same frames, fields and values, dark frames,
 // mask and ground truth. Float pixels are checked finite band by band.
 // Camera RAW files and interlaced PNGs decode only whole: each such frame is
-// held decoded from the first band on (row_reader.hpp).
+// decoded at the first band and its rows kept in a temporary file
+// (row_reader.hpp).
 
 #include "lightstage/common/image_stack.hpp"
 #include "lightstage/host/io/stack_io.hpp"
