@@ -320,7 +320,8 @@ TEST(HostRowReader, AFileDecodedWholeKeepsItsRowsInAnUnlinkedTemporaryFile) {
   EXPECT_TRUE(std::filesystem::is_empty(temporary));
 }
 
-// No temporary folder to keep the rows in: the error names the file and $TMPDIR.
+// No temporary folder to keep the rows in: the error names the file and
+// $TMPDIR; read once, the rows need none.
 TEST(HostRowReader, AFileDecodedWholeWithoutATemporaryFolderSaysSo) {
   const auto dir = testing::scratch_dir();
   const TemporaryFolder scoped(dir / "missing");
@@ -331,6 +332,10 @@ TEST(HostRowReader, AFileDecodedWholeWithoutATemporaryFolderSaysSo) {
   const std::string error = error_of([&] { io::open_row_reader(path); });
   EXPECT_THAT(error, HasSubstr(path.string()));
   EXPECT_THAT(error, HasSubstr("TMPDIR"));
+  // Read once, the file stays in memory and needs no temporary folder.
+  cv::Mat rows;
+  io::open_row_reader(path, io::RowReading::kOnce)->read(0, kHeight, rows);
+  EXPECT_EQ(rows.size(), cv::Size(kWidth, kHeight));
 }
 
 TEST(HostRowReader, PfmBandsEqualTheWholeImageInAnyOrder) {

@@ -100,7 +100,7 @@ CalibrationImages load_calibration_index(const fs::path& folder, int min_images)
   CalibrationImages images;
   images.folder = folder;
   {
-    const auto first = io::open_row_reader(folder / stack.frames.front().filename);
+    const auto first = io::open_row_reader(folder / stack.frames.front().filename, io::RowReading::kOnce);
     images.image_size = first->size();
     images.image_type = first->type();
   }
@@ -134,8 +134,9 @@ CalibrationImages load_calibration_index(const fs::path& folder, int min_images)
 namespace {
 
 // Opens image `i`'s file for reading by rows, refusing one of another size or type than the first.
-std::unique_ptr<io::RowReader> open_frame(const CalibrationImages& images, std::size_t i) {
-  auto reader = io::open_row_reader(images.folder / images.filenames[i]);
+std::unique_ptr<io::RowReader> open_frame(const CalibrationImages& images, std::size_t i,
+                                          io::RowReading reading) {
+  auto reader = io::open_row_reader(images.folder / images.filenames[i], reading);
   if (reader->size() != images.image_size || reader->type() != images.image_type) {
     fail("{}: image is {}x{} of type {}, but {} is {}x{} of type {}", reader->path().string(),
          reader->size().width, reader->size().height, reader->type(), images.filenames.front(),
@@ -156,7 +157,7 @@ void for_each_calibration_image(const CalibrationImages& index, const cv::Rect& 
     for (std::size_t i = begin; i < end; ++i) {
       Frame frame = index.frames[i];
       cv::Mat rows, grey, saturated;
-      open_frame(index, i)->read(region.y, region.height, rows);
+      open_frame(index, i, io::RowReading::kOnce)->read(region.y, region.height, rows);
       frame.image = rows.colRange(region.x, region.x + region.width);
       convert(frame, &grey, &saturated);
       visit(i, grey, saturated);
@@ -185,7 +186,7 @@ CalibrationViews calibration_views(const CalibrationImages& images, int threads,
   const cv::Size size = images.image_size;
   const std::size_t n = images.size();
   std::vector<std::unique_ptr<io::RowReader>> readers(n);
-  for (std::size_t i = 0; i < n; ++i) readers[i] = open_frame(images, i);
+  for (std::size_t i = 0; i < n; ++i) readers[i] = open_frame(images, i, io::RowReading::kInBands);
   // Per pixel of a band, each image decoded (at most float RGB) and made grey with its saturation flag.
   const std::size_t row_bytes = static_cast<std::size_t>(size.width) * n * (12 + 4 + 1);
   const int band_rows = static_cast<int>(std::clamp<std::size_t>(

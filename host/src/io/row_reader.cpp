@@ -71,6 +71,19 @@ class PfmRows final : public RowReader {
   std::ifstream in_;
 };
 
+// A file decoded whole for a single read: held until the reader goes.
+class DecodedRows final : public RowReader {
+ public:
+  DecodedRows(const std::filesystem::path& path, cv::Mat image)
+      : RowReader(path, image.size(), image.type()), image_(std::move(image)) {}
+  bool decoded_whole() const override { return true; }
+
+ private:
+  void read_rows(int y0, int rows, cv::Mat& out) override { image_.rowRange(y0, y0 + rows).copyTo(out); }
+
+  cv::Mat image_;
+};
+
 std::unique_ptr<RowReader> open_pfm_rows(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) fail("{}: cannot open (no such file or not readable)", path.string());
@@ -93,7 +106,7 @@ void RowReader::read(int y0, int rows, cv::Mat& out) {
   read_rows(y0, rows, out);
 }
 
-std::unique_ptr<RowReader> open_row_reader(const std::filesystem::path& path) {
+std::unique_ptr<RowReader> open_row_reader(const std::filesystem::path& path, RowReading reading) {
   std::error_code error;
   if (!std::filesystem::exists(path, error)) fail("{}: no such file", path.string());
   if (!std::filesystem::is_regular_file(path, error)) fail("{}: not a regular file", path.string());
@@ -102,6 +115,7 @@ std::unique_ptr<RowReader> open_row_reader(const std::filesystem::path& path) {
   if (!is_raw_file(path)) {
     if (auto png = open_png_rows(path)) return png;
   }
+  if (reading == RowReading::kOnce) return std::make_unique<DecodedRows>(path, read_image(path));
   return spill_decoded_rows(path, read_image(path));
 }
 

@@ -48,9 +48,15 @@ class RowReader {
   int type_ = 0;
 };
 
+// How the caller reads: band after band, or one range of rows once (a file
+// that decodes only whole then stays in memory: a temporary file would only
+// be written and dropped).
+enum class RowReading { kInBands, kOnce };
+
 // Opens `path` (a stack image: PNG, PFM, TIFF or camera RAW, read_image's
 // dispatch) and reads its header. Throws InputError naming the file when it
 // is missing, not such an image, or of a type read_image refuses.
-std::unique_ptr<RowReader> open_row_reader(const std::filesystem::path& path);
+std::unique_ptr<RowReader> open_row_reader(const std::filesystem::path& path,
+                                           RowReading reading = RowReading::kInBands);
 
 }  // namespace lightstage::io
