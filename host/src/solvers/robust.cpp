@@ -93,13 +93,18 @@ constexpr double kMaxNoisePower = 0.5;
 constexpr std::size_t kMinHalf = 4;
 constexpr double kMinSignalRatio = 1.2;
 
+// The median of `values` (reordered; not empty).
+double median_in_place(std::vector<double>& values) {
+  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
+
 double median_of(const PixelObservations& pixel, const std::vector<Eigen::Index>& kept,
                  std::vector<double>& scratch) {
   scratch.clear();
   for (const Eigen::Index j : kept) scratch.push_back(pixel.values(j));
-  const auto mid = scratch.begin() + static_cast<std::ptrdiff_t>(scratch.size() / 2);
-  std::nth_element(scratch.begin(), mid, scratch.end());
-  return *mid;
+  return median_in_place(scratch);
 }
 
 bool irls_l1(const PixelObservations& pixel, const RobustOptions& options, double scale, RobustWorkspace& ws,
@@ -174,13 +179,6 @@ bool ransac(const PixelObservations& pixel, const RobustOptions& options, std::s
     s = refit;
   }
   return true;
-}
-
-// The median of `values` (reordered; not empty).
-double median_in_place(std::vector<double>& values) {
-  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), mid, values.end());
-  return *mid;
 }
 
 // How the pixel's noise grows with its signal, σ ∝ prediction^power: from
