@@ -186,7 +186,10 @@ CalibrationViews calibration_views(const CalibrationImages& images, int threads,
   const cv::Size size = images.image_size;
   const std::size_t n = images.size();
   std::vector<std::unique_ptr<io::RowReader>> readers(n);
-  for (std::size_t i = 0; i < n; ++i) readers[i] = open_frame(images, i, io::RowReading::kInBands);
+  // Opening decodes a file that decodes only whole (camera RAW): one per thread at a time.
+  parallel_chunks(n, threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) readers[i] = open_frame(images, i, io::RowReading::kInBands);
+  });
   // Per pixel of a band, each image decoded (at most float RGB) and made grey with its saturation flag.
   const std::size_t row_bytes = static_cast<std::size_t>(size.width) * n * (12 + 4 + 1);
   const int band_rows = static_cast<int>(std::clamp<std::size_t>(
