@@ -93,6 +93,11 @@ constexpr double kMaxNoisePower = 0.5;
 constexpr std::size_t kMinHalf = 4;
 constexpr double kMinSignalRatio = 1.2;
 
+// Usable and above the shadow threshold: what every step may fit.
+bool is_lit(const PixelObservations& pixel, Eigen::Index j, const RobustOptions& options) {
+  return pixel.usable[static_cast<std::size_t>(j)] && pixel.values(j) > options.shadow_threshold;
+}
+
 // The median of `values` (reordered; not empty).
 double median_in_place(std::vector<double>& values) {
   const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
@@ -233,9 +238,7 @@ void refit_inliers(const PixelObservations& pixel, const RobustOptions& options,
 
   ws.in_selection.assign(static_cast<std::size_t>(pixel.count()), 0);
   for (const Eigen::Index j : ws.kept) ws.in_selection[static_cast<std::size_t>(j)] = 1;
-  auto lit = [&](Eigen::Index j) {
-    return pixel.usable[static_cast<std::size_t>(j)] && pixel.values(j) > options.shadow_threshold;
-  };
+  auto lit = [&](Eigen::Index j) { return is_lit(pixel, j, options); };
   ws.scratch.clear();
   for (Eigen::Index j = 0; j < pixel.count(); ++j) {
     if (lit(j) && !ws.in_selection[static_cast<std::size_t>(j)]) ws.scratch.push_back(standardised(j));
@@ -271,8 +274,7 @@ RobustPixelFit fit_robust_pixel(const PixelObservations& pixel, const RobustOpti
   RobustPixelFit fit;
   ws.kept.clear();
   for (Eigen::Index j = 0; j < pixel.count(); ++j) {
-    if (pixel.usable[static_cast<std::size_t>(j)] && pixel.values(j) > options.shadow_threshold)
-      ws.kept.push_back(j);
+    if (is_lit(pixel, j, options)) ws.kept.push_back(j);
   }
   // Cast-shadow screen: a consensus fit over every lit observation; values
   // well below it are light the surface did not get (cast shadows and their
