@@ -7,6 +7,7 @@
 #include "lightstage/host/calibration/apply_calibration.hpp"
 #include "lightstage/host/calibration/calibrate_lights.hpp"
 #include "lightstage/host/calibration/calibration_output.hpp"
+#include "lightstage/host/calibration/light_intensity.hpp"
 #include "lightstage/host/eval/angular_error.hpp"
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/stack_io.hpp"
@@ -120,6 +121,54 @@ TEST(CalibrationIntensity, MatteSphereAndFlatTargetRecoverRelativeIntensities) {
   cv::meanStdDev(flat.flat_field, mean, spread, flat.flat_field > 0);
   EXPECT_NEAR(mean[0], 1.0, 1e-3);
   EXPECT_LT(spread[0], 0.01);
+}
+
+// A target fitted band by band, its rows decoded again for every round, gives
+// what the target decoded once gives: the same passes, the same sums.
+TEST(CalibrationIntensity, BandsReadAgainEachRoundGiveTheKeptTargetsFit) {
+  const Rig rig = uneven_rig();
+  const fs::path dir = testing::scratch_dir();
+  write_sim_stack(rig, "chrome-probe", dir / "chrome", 128);
+  write_sim_stack(rig, "white-target", dir / "target", 128);
+  LightCalibrationOptions o;
+  o.inputs = {dir / "chrome"};
+  o.rig = default_rig_path();
+  const LightCalibration cal = calibrate_lights(o).calibration;
+  LightGeometry geometry;
+  geometry.object_centre_mm = cal.object_position_mm;
+  for (const auto& light : cal.lights) {
+    geometry.measured.push_back(light.measured);
+    geometry.directions.push_back(light.direction);
+    geometry.positions_mm.push_back(light.position_mm);
+  }
+  const CalibrationImages index = load_calibration_index(dir / "target");
+  ASSERT_FALSE(index.mask.empty());
+  const TargetSurface surface = TargetSurface::plane(index.mask, cal.camera, cal.object_position_mm.z());
+  for (const bool flat : {false, true}) {
+    const IntensityResult kept = fit_intensities(index, surface, geometry, flat, {}, 2);
+    // A band of one row; the thread count does not change the sums either.
+    const IntensityResult banded = fit_intensities(index, surface, geometry, flat, {}, 1, 1);
+    EXPECT_EQ(kept.target_pixels, static_cast<std::size_t>(cv::countNonZero(index.mask)));
+    EXPECT_EQ(banded.target_pixels, kept.target_pixels);
+    EXPECT_EQ(banded.pixels_used, kept.pixels_used);
+    for (std::size_t i = 0; i < kept.relative.size(); ++i) {
+      EXPECT_EQ(banded.relative[i], kept.relative[i]) << i;
+      EXPECT_EQ(banded.residual[i], kept.residual[i]) << i;
+      // Within 2.5 % at 128² (the lights from a 128² chrome sphere; at 256² within 1 %, above).
+      EXPECT_NEAR(kept.relative[i], true_relative(rig, i), 0.025 * true_relative(rig, i)) << i;
+    }
+    ASSERT_EQ(kept.flat_field.empty(), !flat);
+    if (flat) {
+      EXPECT_EQ(cv::norm(kept.flat_field, banded.flat_field, cv::NORM_INF), 0.0);
+    }
+  }
+  // A target outside the images is named.
+  const TargetSurface nowhere =
+      TargetSurface::plane(cv::Mat::zeros(index.image_size, CV_8UC1), cal.camera, 0);
+  EXPECT_NE(error_of([&] {
+              fit_intensities(index, nowhere, geometry, true, {});
+            }).find("target: the intensity target covers no pixel"),
+            std::string::npos);
 }
 
 // A Lambertian object about a fifth of the dome radius under near LEDs:

@@ -78,6 +78,32 @@ void report_position_accuracy(const LightCalibration& cal) {
         100 * peak);
 }
 
+// Where the intensity target is in its stack's images: the mask, else the median image's well-lit part
+// (a flat target) or its one circle (a matte sphere).
+TargetSurface intensity_target_surface(const CalibrationImages& target, const LightCalibration& cal,
+                                       const LightCalibrationOptions& options) {
+  if (options.intensity_target == IntensityTarget::kFlatTarget) {
+    cv::Mat region = target.mask;
+    if (region.empty()) {
+      const cv::Mat median = calibration_views(target, options.threads).median;
+      double high = 0;
+      cv::minMaxLoc(median, nullptr, &high);
+      cv::compare(median, 0.2 * high, region, cv::CMP_GT);
+    }
+    return TargetSurface::plane(region, cal.camera, cal.object_position_mm.z());
+  }
+  SphereDetectionOptions detection = options.detection;
+  detection.expected = 1;
+  const auto circles =
+      target.mask.empty()
+          ? detect_circles(calibration_views(target, options.threads).median, detection,
+                           options.intensity_input.string() + " (median image)")
+          : circles_from_mask(target.mask, detection, (options.intensity_input / "mask.png").string());
+  const MirrorSphere sphere =
+      locate_sphere(circles.front(), cal.camera, cal.object_position_mm.z(), options.sphere_radius_mm);
+  return TargetSurface::sphere(sphere, cal.camera);
+}
+
 }  // namespace
 
 std::vector<ImageCircle> find_sphere_circles(const CalibrationImages& images, const cv::Mat& median,
@@ -324,7 +350,7 @@ LightCalibrationRun calibrate_lights(const LightCalibrationOptions& options) {
 
   // Intensities from a matte target under the same lights.
   if (!options.intensity_input.empty()) {
-    const CalibrationImages target = load_calibration_images(options.intensity_input, 1, options.threads);
+    const CalibrationImages target = load_calibration_index(options.intensity_input);
     if (target.size() != lights)
       fail("{}: {} images, but the chrome-sphere stack {} has {} (the same lights are needed)",
            options.intensity_input.string(), target.size(), first.folder.string(), lights);
@@ -335,31 +361,10 @@ LightCalibrationRun calibrate_lights(const LightCalibrationOptions& options) {
       geometry.directions.push_back(light.direction);
       geometry.positions_mm.push_back(light.position_mm);
     }
-    TargetSurface surface;
     const bool flat = options.intensity_target == IntensityTarget::kFlatTarget;
-    if (flat) {
-      cv::Mat region = target.mask;
-      if (region.empty()) {
-        // The target: where the median image is well lit.
-        const cv::Mat median = median_image(target.grey);
-        double high = 0;
-        cv::minMaxLoc(median, nullptr, &high);
-        cv::compare(median, 0.2 * high, region, cv::CMP_GT);
-      }
-      surface = plane_surface(region, cal.camera, cal.object_position_mm.z());
-    } else {
-      SphereDetectionOptions detection = options.detection;
-      detection.expected = 1;
-      const auto circles =
-          target.mask.empty()
-              ? detect_circles(median_image(target.grey), detection,
-                               options.intensity_input.string() + " (median image)")
-              : circles_from_mask(target.mask, detection, (options.intensity_input / "mask.png").string());
-      const MirrorSphere sphere =
-          locate_sphere(circles.front(), cal.camera, cal.object_position_mm.z(), options.sphere_radius_mm);
-      surface = sphere_surface(sphere, cal.camera);
-    }
-    const IntensityResult fit = fit_intensities(target, surface, geometry, flat, options.intensity);
+    const TargetSurface surface = intensity_target_surface(target, cal, options);
+    const IntensityResult fit =
+        fit_intensities(target, surface, geometry, flat, options.intensity, options.threads);
     for (std::size_t i = 0; i < lights; ++i) {
       if (!cal.lights[i].measured) continue;
       cal.lights[i].intensity = fit.relative[i];
@@ -368,7 +373,7 @@ LightCalibrationRun calibrate_lights(const LightCalibrationOptions& options) {
     cal.intensity_source = {{"stack", options.intensity_input.string()},
                             {"target", intensity_target_name(options.intensity_target)},
                             {"near_lights", cal.has_positions()},
-                            {"pixels", surface.pixels.size()}};
+                            {"pixels", fit.target_pixels}};
     run.flat_field = fit.flat_field;
   }
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -182,29 +182,43 @@ CalibrationImages load_calibration_images(const fs::path& folder, int min_images
   return images;
 }
 
+CalibrationRows::CalibrationRows(const CalibrationImages& index, int threads)
+    : index_(index), threads_(threads), readers_(index.size()) {
+  // Opening decodes a file that decodes only whole (camera RAW): one per thread at a time.
+  parallel_chunks(index.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) readers_[i] = open_frame(index, i, io::RowReading::kInBands);
+  });
+}
+
+CalibrationRows::~CalibrationRows() = default;
+
+void CalibrationRows::read(int y0, int rows, const cv::Range& columns, std::vector<cv::Mat>& grey,
+                           std::vector<cv::Mat>& saturated) {
+  grey.resize(readers_.size());
+  saturated.resize(readers_.size());
+  parallel_chunks(readers_.size(), threads_, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      Frame frame = index_.frames[i];
+      readers_[i]->read(y0, rows, frame.image);
+      frame.image = frame.image.colRange(columns);
+      convert(frame, &grey[i], &saturated[i]);
+    }
+  });
+}
+
+std::size_t CalibrationRows::bytes_per_pixel() const { return readers_.size() * (12 + 4 + 1); }
+
 CalibrationViews calibration_views(const CalibrationImages& images, int threads, std::size_t band_bytes) {
   const cv::Size size = images.image_size;
-  const std::size_t n = images.size();
-  std::vector<std::unique_ptr<io::RowReader>> readers(n);
-  // Opening decodes a file that decodes only whole (camera RAW): one per thread at a time.
-  parallel_chunks(n, threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) readers[i] = open_frame(images, i, io::RowReading::kInBands);
-  });
-  // Per pixel of a band, each image decoded (at most float RGB) and made grey with its saturation flag.
-  const std::size_t row_bytes = static_cast<std::size_t>(size.width) * n * (12 + 4 + 1);
+  CalibrationRows frames(images, threads);
+  const std::size_t row_bytes = static_cast<std::size_t>(size.width) * frames.bytes_per_pixel();
   const int band_rows = static_cast<int>(std::clamp<std::size_t>(
       band_bytes / std::max<std::size_t>(row_bytes, 1), 1, static_cast<std::size_t>(size.height)));
   CalibrationViews views{cv::Mat(size, CV_32FC1), cv::Mat(size, CV_32FC1)};
-  std::vector<cv::Mat> grey(n), saturated(n);
+  std::vector<cv::Mat> grey, saturated;
   for (int y0 = 0; y0 < size.height; y0 += band_rows) {
     const int rows = std::min(band_rows, size.height - y0);
-    parallel_chunks(n, threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-      for (std::size_t i = begin; i < end; ++i) {
-        Frame frame = images.frames[i];
-        readers[i]->read(y0, rows, frame.image);
-        convert(frame, &grey[i], &saturated[i]);
-      }
-    });
+    frames.read(y0, rows, cv::Range(0, size.width), grey, saturated);
     median_image(grey, threads).copyTo(views.median.rowRange(y0, y0 + rows));
     max_image(grey).copyTo(views.maximum.rowRange(y0, y0 + rows));
   }

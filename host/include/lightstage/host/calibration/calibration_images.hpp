@@ -14,9 +14,14 @@
 #include <cstddef>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
+
+namespace lightstage::io {
+class RowReader;
+}
 
 namespace lightstage::calibration {
 
@@ -66,6 +71,33 @@ void load_calibration_pixels(CalibrationImages& images, const cv::Rect& region, 
 // The index and every image whole.
 CalibrationImages load_calibration_images(const std::filesystem::path& folder, int min_images = 1,
                                           int threads = 0);
+
+// Every image of an index read by rows, all kept open from one band to the
+// next (io/row_reader.hpp): bands read top to bottom decode each file once, and
+// a pass that starts again at the top decodes it again (a camera RAW file is
+// decoded whole once, as it opens, and read back from its temporary file).
+class CalibrationRows {
+ public:
+  // Opens every image, several at once on `threads`. Throws InputError naming
+  // the file for an image of another size or type than the first.
+  explicit CalibrationRows(const CalibrationImages& index, int threads = 0);
+  ~CalibrationRows();
+  CalibrationRows(const CalibrationRows&) = delete;
+  CalibrationRows& operator=(const CalibrationRows&) = delete;
+
+  // Rows [y0, y0 + rows) and `columns` of every image, grey and saturated as
+  // CalibrationImages holds them.
+  void read(int y0, int rows, const cv::Range& columns, std::vector<cv::Mat>& grey,
+            std::vector<cv::Mat>& saturated);
+  // Bytes a band holds per pixel of its rows: each image decoded (at most
+  // float RGB) and made grey with its saturation flag.
+  std::size_t bytes_per_pixel() const;
+
+ private:
+  const CalibrationImages& index_;
+  int threads_;
+  std::vector<std::unique_ptr<io::RowReader>> readers_;
+};
 
 // What every image of a stack shows together, per pixel (CV_32FC1, grey as
 // above): the median and the maximum, as median_image and max_image give

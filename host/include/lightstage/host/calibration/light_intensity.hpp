@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <vector>
@@ -33,17 +34,35 @@ struct IntensityOptions {
   void check() const;  // throws InputError naming the field
 };
 
-// The target's visible surface: pixels with their 3-D point and normal.
-struct TargetSurface {
-  std::vector<cv::Point> pixels;
-  std::vector<Vec3> points_mm;
-  std::vector<Vec3> normals;
-};
+// The target's visible surface: which pixels it covers, and the 3-D point and
+// normal of each, worked out when asked, so that a target as large as the
+// image is never held pixel by pixel.
+class TargetSurface {
+ public:
+  struct Point {
+    Vec3 point_mm;
+    Vec3 normal;
+  };
+  // A matte sphere's pixels (those inside its outline, less a rim of `margin_px`).
+  static TargetSurface sphere(const MirrorSphere& sphere, const CameraGeometry& camera, double margin_px = 2);
+  // A flat target facing the camera at height z_mm, over the pixels of `region` (CV_8UC1).
+  static TargetSurface plane(const cv::Mat& region, const CameraGeometry& camera, double z_mm);
 
-// A matte sphere's pixels (those inside its outline, less a rim of `margin_px`).
-TargetSurface sphere_surface(const MirrorSphere& sphere, const CameraGeometry& camera, double margin_px = 2);
-// A flat target facing the camera at height z_mm, over the pixels of `region` (CV_8UC1).
-TargetSurface plane_surface(const cv::Mat& region, const CameraGeometry& camera, double z_mm);
+  // Every pixel of the target lies inside (empty when it covers none).
+  const cv::Rect& bounds() const { return bounds_; }
+  // The surface seen through pixel (column, row) of the image; nullopt off the target.
+  std::optional<Point> at(int column, int row) const;
+
+ private:
+  TargetSurface(const CameraGeometry& camera, cv::Rect bounds) : camera_(camera), bounds_(bounds) {}
+
+  CameraGeometry camera_;
+  cv::Rect bounds_;
+  std::optional<MirrorSphere> sphere_;
+  double margin_px_ = 0;
+  cv::Mat region_;  // the plane's pixels
+  double plane_z_mm_ = 0;
+};
 
 // What the fit needs to know of each light (one per image).
 struct LightGeometry {
@@ -54,16 +73,23 @@ struct LightGeometry {
 };
 
 struct IntensityResult {
-  std::vector<double> relative;  // per light; mean 1 over the lights fitted
-  std::vector<double> residual;  // per light, RMS misfit / mean value
-  std::vector<int> pixels_used;  // per light
-  cv::Mat flat_field;            // flat target: CV_32FC1, mean 1 over the target; else empty
+  std::vector<double> relative;   // per light; mean 1 over the lights fitted
+  std::vector<double> residual;   // per light, RMS misfit / mean value
+  std::vector<int> pixels_used;   // per light
+  cv::Mat flat_field;             // flat target: CV_32FC1, mean 1 over the target; else empty
+  std::size_t target_pixels = 0;  // the target's pixels in the images
 };
 
-// Fits the model above. Throws InputError naming the image when a measured
-// light lights fewer than 16 usable pixels.
-IntensityResult fit_intensities(const CalibrationImages& images, const TargetSurface& surface,
+// Fits the model above to the images of `index`, read a band of rows at a
+// time (CalibrationRows): the target's rows are decoded once and kept when
+// they fit in `band_bytes`; otherwise each round of the flat target's fit
+// reads them again, band by band, and memory holds only a band and the
+// flat field. Throws InputError naming the image when a measured light lights
+// fewer than 16 usable pixels, and naming the folder when the target covers
+// no pixel.
+IntensityResult fit_intensities(const CalibrationImages& index, const TargetSurface& surface,
                                 const LightGeometry& lights, bool with_flat_field,
-                                const IntensityOptions& options);
+                                const IntensityOptions& options, int threads = 0,
+                                std::size_t band_bytes = std::size_t{512} << 20);
 
 }  // namespace lightstage::calibration
