@@ -1,4 +1,5 @@
 #include "lightstage/host/io/row_reader.hpp"
+#include "lightstage/host/io/temporary_rows.hpp"
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/image_io.hpp"
@@ -318,6 +319,27 @@ TEST(HostRowReader, AFileDecodedWholeKeepsItsRowsInAnUnlinkedTemporaryFile) {
   expect_same(band, image.rowRange(3, 8));
   expect_bands_match(path, image, true);
   EXPECT_TRUE(std::filesystem::is_empty(temporary));
+}
+
+// Rows appended a band at a time come back in any order, from an unlinked file.
+TEST(HostTemporaryRows, BandsAppendedComeBackInAnyOrder) {
+  const auto temporary = testing::scratch_dir() / "tmp";
+  std::filesystem::create_directories(temporary);
+  const TemporaryFolder scoped(temporary);
+  const cv::Mat image = random_image(CV_16UC1, 65536);
+  io::TemporaryRows rows("image.png", image.cols, image.type());
+  for (int y0 = 0; y0 < image.rows; y0 += 7) rows.append(image.rowRange(y0, std::min(y0 + 7, image.rows)));
+  EXPECT_EQ(rows.rows(), image.rows);
+  EXPECT_TRUE(std::filesystem::is_empty(temporary));
+  cv::Mat band;
+  for (const int y0 : {image.rows - 4, 0, 5}) {
+    rows.read(y0, 4, band);
+    expect_same(band, image.rowRange(y0, y0 + 4));
+  }
+  const TemporaryFolder missing(temporary / "missing");
+  const std::string error = error_of([&] { io::TemporaryRows("image.png", 4, CV_32FC1); });
+  EXPECT_THAT(error, HasSubstr("image.png: cannot keep"));
+  EXPECT_THAT(error, HasSubstr("TMPDIR"));
 }
 
 // No temporary folder to keep the rows in: the error names the file and

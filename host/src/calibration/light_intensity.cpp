@@ -2,11 +2,14 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/parallel.hpp"
+#include "lightstage/host/io/temporary_rows.hpp"
 
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -121,11 +124,7 @@ class IntensityFit {
     *flat_pixels = *target_pixels = 0;
     for (int y0 = bounds.y; y0 < bounds.br().y; y0 += band_rows_) {
       const int rows = std::min(band_rows_, bounds.br().y - y0);
-      if (!kept_ || y0 != band_y0_) {  // a target in one band is decoded once, for every pass
-        frames_.read(y0, rows, cv::Range(bounds.x, bounds.br().x), grey_, saturated_);
-        band_y0_ = y0;
-        kept_ = rows == bounds.height;
-      }
+      load_band(y0, rows);
       std::vector<RowSums> sums(static_cast<std::size_t>(rows));
       parallel_for(rows, threads_, [&](int r) { sums[static_cast<std::size_t>(r)] = row(y0, r, k, flat); });
       for (const RowSums& row : sums) {  // in row order: the same sums whatever the threads
@@ -139,6 +138,32 @@ class IntensityFit {
   }
 
  private:
+  // Each image's grey values of rows [y0, y0 + rows) of the target, NaN where saturated. The target
+  // in one band is decoded once and kept; in several, each band is decoded once and kept on disk
+  // (io::TemporaryRows) for the passes after the first.
+  void load_band(int y0, int rows) {
+    const cv::Rect& bounds = surface_.bounds();
+    if (rows == bounds.height && !grey_.empty()) return;
+    const std::size_t n = index_.size();
+    if (!spills_.empty() && spills_.front()->rows() >= y0 - bounds.y + rows) {
+      parallel_for(static_cast<int>(n), threads_, [&](int i) {
+        spills_[static_cast<std::size_t>(i)]->read(y0 - bounds.y, rows, grey_[static_cast<std::size_t>(i)]);
+      });
+      return;
+    }
+    std::vector<cv::Mat> saturated;
+    frames_.read(y0, rows, cv::Range(bounds.x, bounds.br().x), grey_, saturated);
+    if (rows < bounds.height && spills_.empty())
+      for (std::size_t i = 0; i < n; ++i)
+        spills_.push_back(std::make_unique<io::TemporaryRows>((index_.folder / index_.filenames[i]).string(),
+                                                              bounds.width, CV_32FC1));
+    parallel_for(static_cast<int>(n), threads_, [&](int i) {
+      const auto image = static_cast<std::size_t>(i);
+      grey_[image].setTo(std::numeric_limits<float>::quiet_NaN(), saturated[image]);
+      if (!spills_.empty()) spills_[image]->append(grey_[image]);
+    });
+  }
+
   RowSums row(int y0, int r, const std::vector<double>* k, cv::Mat& flat) const {
     const std::size_t n = index_.size();
     const cv::Rect& bounds = surface_.bounds();
@@ -155,7 +180,7 @@ class IntensityFit {
         shading[j] = 0;
         if (!lights_.measured[j]) continue;
         const float v = grey_[j].at<float>(r, c);
-        if (saturated_[j].at<std::uint8_t>(r, c) != 0 || !(v > 0) || v > options_.max_value) continue;
+        if (!(v > 0) || v > options_.max_value) continue;  // NaN: saturated
         Vec3 l = lights_.directions[j];
         double falloff = 1;
         if (lights_.positions_mm[j]) {
@@ -208,9 +233,8 @@ class IntensityFit {
   int threads_;
   CalibrationRows frames_;
   int band_rows_ = 1;
-  std::vector<cv::Mat> grey_, saturated_;
-  int band_y0_ = -1;
-  bool kept_ = false;
+  std::vector<cv::Mat> grey_;
+  std::vector<std::unique_ptr<io::TemporaryRows>> spills_;  // per image: its target rows, when in bands
 };
 
 }  // namespace
