@@ -134,13 +134,7 @@ TEST(CalibrationIntensity, BandsReadAgainEachRoundGiveTheKeptTargetsFit) {
   o.inputs = {dir / "chrome"};
   o.rig = default_rig_path();
   const LightCalibration cal = calibrate_lights(o).calibration;
-  LightGeometry geometry;
-  geometry.object_centre_mm = cal.object_position_mm;
-  for (const auto& light : cal.lights) {
-    geometry.measured.push_back(light.measured);
-    geometry.directions.push_back(light.direction);
-    geometry.positions_mm.push_back(light.position_mm);
-  }
+  const LightGeometry geometry = LightGeometry::of(cal);
   const CalibrationImages index = load_calibration_index(dir / "target");
   ASSERT_FALSE(index.mask.empty());
   const TargetSurface surface = TargetSurface::plane(index.mask, cal.camera, cal.object_position_mm.z());

@@ -354,17 +354,10 @@ LightCalibrationRun calibrate_lights(const LightCalibrationOptions& options) {
     if (target.size() != lights)
       fail("{}: {} images, but the chrome-sphere stack {} has {} (the same lights are needed)",
            options.intensity_input.string(), target.size(), first.folder.string(), lights);
-    LightGeometry geometry;
-    geometry.object_centre_mm = cal.object_position_mm;
-    for (const auto& light : cal.lights) {
-      geometry.measured.push_back(light.measured);
-      geometry.directions.push_back(light.direction);
-      geometry.positions_mm.push_back(light.position_mm);
-    }
     const bool flat = options.intensity_target == IntensityTarget::kFlatTarget;
     const TargetSurface surface = intensity_target_surface(target, cal, options);
     const IntensityResult fit =
-        fit_intensities(target, surface, geometry, flat, options.intensity, options.threads);
+        fit_intensities(target, surface, LightGeometry::of(cal), flat, options.intensity, options.threads);
     for (std::size_t i = 0; i < lights; ++i) {
       if (!cal.lights[i].measured) continue;
       cal.lights[i].intensity = fit.relative[i];

@@ -68,6 +68,17 @@ std::optional<TargetSurface::Point> TargetSurface::at(int column, int row) const
   return Point{origin + (plane_z_mm_ - origin.z()) / dir.z() * dir, Vec3::UnitZ()};
 }
 
+LightGeometry LightGeometry::of(const LightCalibration& calibration) {
+  LightGeometry geometry;
+  geometry.object_centre_mm = calibration.object_position_mm;
+  for (const auto& light : calibration.lights) {
+    geometry.measured.push_back(light.measured);
+    geometry.directions.push_back(light.direction);
+    geometry.positions_mm.push_back(light.position_mm);
+  }
+  return geometry;
+}
+
 namespace {
 
 // What one pass gathers of a light's pixels, given the flat field F of that

@@ -10,6 +10,7 @@
 
 #include "lightstage/host/calibration/calibration_images.hpp"
 #include "lightstage/host/calibration/camera_geometry.hpp"
+#include "lightstage/host/calibration/light_calibration.hpp"
 #include "lightstage/host/calibration/mirror_sphere.hpp"
 
 #include <nlohmann/json.hpp>
@@ -70,6 +71,9 @@ struct LightGeometry {
   std::vector<Vec3> directions;  // from the object centre
   std::vector<std::optional<Vec3>> positions_mm;
   Vec3 object_centre_mm = Vec3::Zero();
+
+  // The lights a calibration measured: directions, and LED positions where it has them.
+  static LightGeometry of(const LightCalibration& calibration);
 };
 
 struct IntensityResult {
