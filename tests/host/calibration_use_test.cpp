@@ -123,8 +123,23 @@ TEST(CalibrationIntensity, MatteSphereAndFlatTargetRecoverRelativeIntensities) {
   EXPECT_LT(spread[0], 0.01);
 }
 
-// A target fitted band by band, its rows decoded again for every round, gives
-// what the target decoded once gives: the same passes, the same sums.
+TEST(CalibrationBadInput, AnIntensityTargetOfAnotherSizeIsNamed) {
+  const Rig rig = load_rig(default_rig_path());
+  const fs::path dir = testing::scratch_dir();
+  write_sim_stack(rig, "chrome-probe", dir / "chrome", 128);
+  write_sim_stack(rig, "matte-sphere", dir / "matte", 64);
+  LightCalibrationOptions o;
+  o.inputs = {dir / "chrome"};
+  o.rig = default_rig_path();
+  o.intensity_input = dir / "matte";
+  EXPECT_NE(error_of([&] { calibrate_lights(o); })
+                .find("matte: images are 64x64, but the chrome-sphere stack " + (dir / "chrome").string() +
+                      " was taken at 128x128"),
+            std::string::npos);
+}
+
+// A target fitted band by band, its rows read back from disk for every round,
+// gives what the target kept in memory gives: the same passes, the same sums.
 TEST(CalibrationIntensity, BandsReadAgainEachRoundGiveTheKeptTargetsFit) {
   const Rig rig = uneven_rig();
   const fs::path dir = testing::scratch_dir();

@@ -327,7 +327,7 @@ TEST(HostTemporaryRows, BandsAppendedComeBackInAnyOrder) {
   std::filesystem::create_directories(temporary);
   const TemporaryFolder scoped(temporary);
   const cv::Mat image = random_image(CV_16UC1, 65536);
-  io::TemporaryRows rows("image.png", image.cols, image.type());
+  io::TemporaryRows rows("image.png", image.cols, image.type(), image.rows);
   for (int y0 = 0; y0 < image.rows; y0 += 7) rows.append(image.rowRange(y0, std::min(y0 + 7, image.rows)));
   EXPECT_EQ(rows.rows(), image.rows);
   EXPECT_TRUE(std::filesystem::is_empty(temporary));
@@ -337,8 +337,8 @@ TEST(HostTemporaryRows, BandsAppendedComeBackInAnyOrder) {
     expect_same(band, image.rowRange(y0, y0 + 4));
   }
   const TemporaryFolder missing(temporary / "missing");
-  const std::string error = error_of([&] { io::TemporaryRows("image.png", 4, CV_32FC1); });
-  EXPECT_THAT(error, HasSubstr("image.png: cannot keep"));
+  const std::string error = error_of([&] { io::TemporaryRows("image.png", 4, CV_32FC1, 8); });
+  EXPECT_THAT(error, HasSubstr("image.png: cannot keep its 1 MB of decoded rows"));
   EXPECT_THAT(error, HasSubstr("TMPDIR"));
 }
 

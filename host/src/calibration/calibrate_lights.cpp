@@ -354,6 +354,12 @@ LightCalibrationRun calibrate_lights(const LightCalibrationOptions& options) {
     if (target.size() != lights)
       fail("{}: {} images, but the chrome-sphere stack {} has {} (the same lights are needed)",
            options.intensity_input.string(), target.size(), first.folder.string(), lights);
+    if (target.width() != cal.camera.width || target.height() != cal.camera.height)
+      fail(
+          "{}: images are {}x{}, but the chrome-sphere stack {} was taken at {}x{} (the same camera is "
+          "needed)",
+          options.intensity_input.string(), target.width(), target.height(), first.folder.string(),
+          cal.camera.width, cal.camera.height);
     const bool flat = options.intensity_target == IntensityTarget::kFlatTarget;
     const TargetSurface surface = intensity_target_surface(target, cal, options);
     const IntensityResult fit =

@@ -107,20 +107,25 @@ struct RowSums {
 // The passes of the fit over the target's rows, band by band.
 class IntensityFit {
  public:
+  // `passes`: how many times the target's rows are read (a band decoded in the first is kept on disk
+  // for the others).
   IntensityFit(const CalibrationImages& index, const TargetSurface& surface, const LightGeometry& lights,
-               const IntensityOptions& options, int threads, std::size_t band_bytes)
+               const IntensityOptions& options, int threads, std::size_t band_bytes, int passes)
       : index_(index),
         surface_(surface),
         lights_(lights),
         options_(options),
         threads_(threads),
+        passes_(passes),
         frames_(index, threads) {
     const cv::Rect& bounds = surface.bounds();
-    // Per row of a band: each image's grey and saturation flag over the target's columns, and the rows
-    // each thread decodes whole (at most float RGB) before they are cut.
-    const std::size_t row_bytes =
-        index.size() * static_cast<std::size_t>(bounds.width) * (4 + 1) +
-        static_cast<std::size_t>(resolve_threads(threads)) * static_cast<std::size_t>(index.width()) * 12;
+    const auto n = index.size();
+    const auto width = static_cast<std::size_t>(bounds.width);
+    // Per row of a band: each image's grey and saturation flag over the target's columns and each light's
+    // sums; per thread, a row decoded whole (at most float RGB) and its double copy as it is made grey.
+    const std::size_t row_bytes = n * (width * (4 + 1) + sizeof(LightSums)) +
+                                  static_cast<std::size_t>(resolve_threads(threads)) *
+                                      (static_cast<std::size_t>(index.width()) * 12 + width * 24);
     band_rows_ = static_cast<int>(
         std::clamp<std::size_t>(band_bytes / row_bytes, 1, static_cast<std::size_t>(bounds.height)));
   }
@@ -164,10 +169,10 @@ class IntensityFit {
     }
     std::vector<cv::Mat> saturated;
     frames_.read(y0, rows, cv::Range(bounds.x, bounds.br().x), grey_, saturated);
-    if (rows < bounds.height && spills_.empty())
+    if (rows < bounds.height && passes_ > 1 && spills_.empty())
       for (std::size_t i = 0; i < n; ++i)
         spills_.push_back(std::make_unique<io::TemporaryRows>((index_.folder / index_.filenames[i]).string(),
-                                                              bounds.width, CV_32FC1));
+                                                              bounds.width, CV_32FC1, bounds.height));
     parallel_for(static_cast<int>(n), threads_, [&](int i) {
       const auto image = static_cast<std::size_t>(i);
       grey_[image].setTo(std::numeric_limits<float>::quiet_NaN(), saturated[image]);
@@ -242,6 +247,7 @@ class IntensityFit {
   const LightGeometry& lights_;
   const IntensityOptions& options_;
   int threads_;
+  int passes_;
   CalibrationRows frames_;
   int band_rows_ = 1;
   std::vector<cv::Mat> grey_;
@@ -258,7 +264,8 @@ IntensityResult fit_intensities(const CalibrationImages& index, const TargetSurf
   if (lights.directions.size() != n || lights.positions_mm.size() != n || lights.measured.size() != n)
     fail("intensity fit: {} images but {} lights", n, lights.directions.size());
   if (surface.bounds().empty()) fail("{}: the intensity target covers no pixel", index.folder.string());
-  IntensityFit fit(index, surface, lights, options, threads, band_bytes);
+  const int rounds = with_flat_field ? options.iterations : 0;
+  IntensityFit fit(index, surface, lights, options, threads, band_bytes, 1 + rounds);
   cv::Mat flat(index.image_size, CV_32FC1, cv::Scalar::all(0));
   double flat_sum = 0;
   std::size_t flat_pixels = 0, target_pixels = 0;
@@ -280,7 +287,6 @@ IntensityResult fit_intensities(const CalibrationImages& index, const TargetSurf
     result.pixels_used[j] = sums[j].used;
   }
   double scale = 1;  // the mean of the last pass's F
-  const int rounds = with_flat_field ? options.iterations : 0;
   for (int round = 0; round < rounds; ++round) {
     const std::vector<double> k = result.relative;
     sums = fit.pass(&k, flat, &flat_sum, &flat_pixels, &target_pixels);

@@ -8,7 +8,8 @@ namespace {
 class SpilledRows final : public RowReader {
  public:
   SpilledRows(const std::filesystem::path& path, const cv::Mat& image)
-      : RowReader(path, image.size(), image.type()), rows_(path.string(), image.cols, image.type()) {
+      : RowReader(path, image.size(), image.type()),
+        rows_(path.string(), image.cols, image.type(), image.rows) {
     rows_.append(image);
   }
   bool decoded_whole() const override { return true; }

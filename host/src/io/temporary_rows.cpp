@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -28,32 +29,35 @@ int open_unlinked_file(const fs::path& dir) {
 
 }  // namespace
 
-TemporaryRows::TemporaryRows(std::string what, int width, int type)
+TemporaryRows::TemporaryRows(std::string what, int width, int type, int rows)
     : what_(std::move(what)),
       width_(width),
       type_(type),
-      row_bytes_(static_cast<std::size_t>(width) * CV_ELEM_SIZE(type)) {
+      row_bytes_(static_cast<std::size_t>(width) * CV_ELEM_SIZE(type)),
+      expected_rows_(rows) {
   std::error_code error;
   const fs::path dir = fs::temp_directory_path(error);
   if (error) {
     errno = error.value();
-    refuse("no temporary folder", 0);
+    refuse("no temporary folder");
   }
   fd_ = open_unlinked_file(dir);
-  if (fd_ < 0) refuse("open", 0);
+  if (fd_ < 0) refuse("open");
 }
 
 TemporaryRows::~TemporaryRows() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-void TemporaryRows::refuse(const char* step, std::size_t bytes) const {
+void TemporaryRows::refuse(const char* step) const {
+  const int cause = errno;  // before the calls below can change it
   std::error_code error;
   const fs::path dir = fs::temp_directory_path(error);
+  const std::size_t bytes = row_bytes_ * static_cast<std::size_t>(std::max(expected_rows_, rows_));
   fail(
-      "{}: cannot keep {} MB of decoded rows in a temporary file in {} ({}: {}); set TMPDIR to a folder with "
-      "room",
-      what_, (bytes + (1u << 20) - 1) >> 20, error ? "$TMPDIR" : dir.string(), step, std::strerror(errno));
+      "{}: cannot keep its {} MB of decoded rows in a temporary file in {} ({}: {}); set TMPDIR to a folder "
+      "with room",
+      what_, (bytes + (1u << 20) - 1) >> 20, error ? "$TMPDIR" : dir.string(), step, std::strerror(cause));
 }
 
 void TemporaryRows::append(const cv::Mat& rows) {
@@ -67,7 +71,7 @@ void TemporaryRows::append(const cv::Mat& rows) {
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) {
       if (n == 0) errno = ENOSPC;
-      refuse("write", row_bytes_ * static_cast<std::size_t>(rows_ + rows.rows));
+      refuse("write");
     }
     done += static_cast<std::size_t>(n);
   }

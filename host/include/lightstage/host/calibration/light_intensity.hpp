@@ -85,12 +85,12 @@ struct IntensityResult {
 };
 
 // Fits the model above to the images of `index`, read a band of rows at a
-// time (CalibrationRows): the target's rows are decoded once, and kept in
-// memory when they fit in `band_bytes`, else band by band on disk
-// (io::TemporaryRows, 4 bytes per image and target pixel) for the rounds of
-// the flat target's fit after the first. Throws InputError naming the image
-// when a measured light lights fewer than 16 usable pixels, and naming the
-// folder when the target covers no pixel.
+// time (CalibrationRows). The fit decodes the rows of the target's bounding
+// box once: they are kept in memory when they fit in `band_bytes`, else, for
+// the flat target's rounds after the first, band by band on disk
+// (io::TemporaryRows, 4 bytes per image and pixel of the box). Throws
+// InputError naming the image when a measured light lights fewer than 16
+// usable pixels, and naming the folder when the target covers no pixel.
 IntensityResult fit_intensities(const CalibrationImages& index, const TargetSurface& surface,
                                 const LightGeometry& lights, bool with_flat_field,
                                 const IntensityOptions& options, int threads = 0,

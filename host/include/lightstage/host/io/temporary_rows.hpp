@@ -15,9 +15,10 @@ namespace lightstage::io {
 
 class TemporaryRows {
  public:
-  // Rows `width` wide of OpenCV `type`; `what` names them in errors (the file they came from). Throws
-  // InputError naming $TMPDIR when no temporary file can be made.
-  TemporaryRows(std::string what, int width, int type);
+  // Rows `width` wide of OpenCV `type`, `rows` of them expected (for the room errors ask for); `what`
+  // names them in errors (the file they came from). Throws InputError naming $TMPDIR when no temporary
+  // file can be made.
+  TemporaryRows(std::string what, int width, int type, int rows);
   ~TemporaryRows();
   TemporaryRows(const TemporaryRows&) = delete;
   TemporaryRows& operator=(const TemporaryRows&) = delete;
@@ -30,11 +31,12 @@ class TemporaryRows {
   int rows() const { return rows_; }
 
  private:
-  [[noreturn]] void refuse(const char* step, std::size_t bytes) const;
+  [[noreturn]] void refuse(const char* step) const;
 
   std::string what_;
   int width_, type_;
   std::size_t row_bytes_;
+  int expected_rows_;
   int rows_ = 0;
   int fd_ = -1;
 };
