@@ -49,6 +49,14 @@ double true_relative(const Rig& rig, std::size_t i) {
   return rig.leds[i].relative_intensity / (sum / static_cast<double>(rig.leds.size()));
 }
 
+// Calibrating the default rig's lights from the chrome-sphere stack `chrome`.
+LightCalibrationOptions chrome_sphere_options(const fs::path& chrome) {
+  LightCalibrationOptions o;
+  o.inputs = {chrome};
+  o.rig = default_rig_path();
+  return o;
+}
+
 TEST(CalibrationBadInput, MissingHighlightAndOverexposedFramesAreNamed) {
   const Rig rig = load_rig(default_rig_path());
   const fs::path dir = testing::scratch_dir() / "chrome";
@@ -96,9 +104,7 @@ TEST(CalibrationIntensity, MatteSphereAndFlatTargetRecoverRelativeIntensities) {
   write_sim_stack(rig, "chrome-probe", dir / "chrome", 256);
   write_sim_stack(rig, "matte-sphere", dir / "matte", 256);
   write_sim_stack(rig, "white-target", dir / "target", 256);
-  LightCalibrationOptions o;
-  o.inputs = {dir / "chrome"};
-  o.rig = default_rig_path();
+  LightCalibrationOptions o = chrome_sphere_options(dir / "chrome");
   o.intensity_input = dir / "matte";
   o.intensity_target = IntensityTarget::kMatteSphere;
   const auto matte = calibrate_lights(o);
@@ -128,9 +134,7 @@ TEST(CalibrationBadInput, AnIntensityTargetOfAnotherSizeIsNamed) {
   const fs::path dir = testing::scratch_dir();
   write_sim_stack(rig, "chrome-probe", dir / "chrome", 128);
   write_sim_stack(rig, "matte-sphere", dir / "matte", 64);
-  LightCalibrationOptions o;
-  o.inputs = {dir / "chrome"};
-  o.rig = default_rig_path();
+  LightCalibrationOptions o = chrome_sphere_options(dir / "chrome");
   o.intensity_input = dir / "matte";
   EXPECT_NE(error_of([&] { calibrate_lights(o); })
                 .find("matte: images are 64x64, but the chrome-sphere stack " + (dir / "chrome").string() +
@@ -145,9 +149,7 @@ TEST(CalibrationIntensity, BandsReadAgainEachRoundGiveTheKeptTargetsFit) {
   const fs::path dir = testing::scratch_dir();
   write_sim_stack(rig, "chrome-probe", dir / "chrome", 128);
   write_sim_stack(rig, "white-target", dir / "target", 128);
-  LightCalibrationOptions o;
-  o.inputs = {dir / "chrome"};
-  o.rig = default_rig_path();
+  LightCalibrationOptions o = chrome_sphere_options(dir / "chrome");
   const LightCalibration cal = calibrate_lights(o).calibration;
   const LightGeometry geometry = LightGeometry::of(cal);
   const CalibrationImages index = load_calibration_index(dir / "target");
@@ -187,9 +189,7 @@ TEST(CalibrationNearLights, NearLightLambertianLowersTheNormalError) {
   const fs::path dir = testing::scratch_dir();
   write_sim_stack(rig, "chrome-probe", dir / "chrome", 256);
   write_sim_stack(rig, "matte-sphere", dir / "object", 256);
-  LightCalibrationOptions o;
-  o.inputs = {dir / "chrome"};
-  o.rig = default_rig_path();
+  LightCalibrationOptions o = chrome_sphere_options(dir / "chrome");
   const auto run = calibrate_lights(o);
   write_calibration_outputs(dir / "cal", run, o.inputs);
 
@@ -223,9 +223,7 @@ TEST(CalibrationApply, CalibratedIntensitiesReplaceTheStacks) {
   write_sim_stack(rig, "chrome-probe", dir / "chrome", 256);
   write_sim_stack(rig, "matte-sphere", dir / "matte", 256);
   write_sim_stack(rig, "bunny", dir / "object", 256);
-  LightCalibrationOptions o;
-  o.inputs = {dir / "chrome"};
-  o.rig = default_rig_path();
+  LightCalibrationOptions o = chrome_sphere_options(dir / "chrome");
   o.intensity_input = dir / "matte";
   o.intensity_target = IntensityTarget::kMatteSphere;
   const auto run = calibrate_lights(o);
