@@ -432,7 +432,7 @@ TEST(Report, BandsOfAFewRowsDrawTheSamePageAsTheWholeResult) {
   const auto dir = testing::scratch_dir();
   const auto result = result_with_every_map(dir);
   report::ReportOptions options;
-  options.band_rows = kSize;
+  options.band_rows = kSize;  // one band: decoded once and kept for every pass
   report::ReportSummary whole_summary;
   const std::string whole = without_time(report::render_report(result, options, &whole_summary));
   const std::vector<std::string> expected = {"viewer",           "surface",  "depth", "lights",

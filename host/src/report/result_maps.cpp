@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace lightstage::report {
 
@@ -94,14 +95,33 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   const int height = size.height;
   ResultPictures out;
   const std::size_t band_bytes = folder.bytes_per_pixel() + 64;  // + depth, truth, error and the pictures
-  out.band_rows = sources.band_rows > 0
-                      ? sources.band_rows
-                      : static_cast<int>(std::clamp<std::size_t>(
-                            kReportBandBytes / (band_bytes * static_cast<std::size_t>(size.width)), 1,
-                            static_cast<std::size_t>(height)));
+  const std::size_t row_bytes = band_bytes * static_cast<std::size_t>(size.width);
+  const bool whole_kept =
+      sources.band_rows <= 0 && row_bytes * static_cast<std::size_t>(height) <= kReportKeptBytes;
+  out.band_rows = sources.band_rows > 0 ? sources.band_rows
+                  : whole_kept          ? height
+                               : static_cast<int>(std::clamp<std::size_t>(kReportBandBytes / row_bytes, 1,
+                                                                          static_cast<std::size_t>(height)));
   const int step = out.band_rows;
   const auto for_each_band = [&](auto&& visit) {
     for (int y = 0; y < height; y += step) visit(y, std::min(step, height - y));
+  };
+  // A result read as one band is decoded once: its maps, depth and errors serve every pass.
+  const bool one_band = step >= height;
+  std::optional<io::SolveFolder> kept_maps;
+  cv::Mat kept_depth;
+  std::optional<AngularErrorMap> kept_error;
+  const auto read_maps = [&](int y0, int rows) {
+    if (!one_band) return folder.read(y0, rows);
+    if (!kept_maps) kept_maps = folder.read(y0, rows);
+    return *kept_maps;
+  };
+  const auto read_depth = [&](int y0, int rows) {
+    if (one_band && !kept_depth.empty()) return kept_depth;
+    cv::Mat depth;
+    sources.depth->rows->read(y0, rows, depth);
+    if (one_band) kept_depth = depth;
+    return depth;
   };
 
   // Pass 1: the viewer's model, the error's statistics, the quantiles counted.
@@ -113,6 +133,7 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   const bool scale_albedo = !(sources.albedo_scale > 0) && folder.has_albedo();
   // The band's error map, and the truth's mask of it.
   const auto error_rows = [&](const io::SolveFolder& band, int y0, int rows, AngularErrorAccumulator& into) {
+    if (one_band && kept_error) return *kept_error;  // counted into the first pass's accumulator
     AngularErrorMap map;
     map.degrees = cv::Mat(rows, size.width, CV_32FC1, cv::Scalar::all(0));
     map.valid = cv::Mat(rows, size.width, CV_8UC1, cv::Scalar::all(0));
@@ -120,17 +141,17 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
     const cv::Mat mask =
         sources.truth->mask.empty() ? truth.valid : sources.truth->mask.rowRange(y0, y0 + rows);
     into.add(band.normals, truth.normals, mask, &map);
+    if (one_band) kept_error = map;
     return map;
   };
   for_each_band([&](int y0, int rows) {
-    const io::SolveFolder band = folder.read(y0, rows);
+    const io::SolveFolder band = read_maps(y0, rows);
     viewer.add(band, y0);
     band.solved.copyTo(solved.rowRange(y0, y0 + rows));
     if (scale_albedo) albedo_q.count(band.albedo, band.solved);
     if (!band.residual.empty()) residual_q.count(band.residual, band.solved);
     if (sources.depth) {
-      cv::Mat depth;
-      sources.depth->rows->read(y0, rows, depth);
+      const cv::Mat depth = read_depth(y0, rows);
       const cv::Mat usable = usable_depth(depth, band.solved);
       for (const float v : valid_values(depth, usable)) {
         depth_low = std::min(depth_low, v);
@@ -151,12 +172,11 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
       albedo_q.located() || residual_q.located() || depth_median.located() || error_q.located();
   if (gather)
     for_each_band([&](int y0, int rows) {
-      const io::SolveFolder band = folder.read(y0, rows);
+      const io::SolveFolder band = read_maps(y0, rows);
       if (scale_albedo) albedo_q.gather(band.albedo, band.solved);
       if (!band.residual.empty()) residual_q.gather(band.residual, band.solved);
       if (sources.depth && sources.depth->focal_px > 0) {
-        cv::Mat depth;
-        sources.depth->rows->read(y0, rows, depth);
+        const cv::Mat depth = read_depth(y0, rows);
         depth_median.gather(depth, usable_depth(depth, band.solved));
       }
       if (sources.truth) {
@@ -191,7 +211,7 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   }
   bool method_map_ok = sources.method_map != nullptr;
   for_each_band([&](int y0, int rows) {
-    const io::SolveFolder band = folder.read(y0, rows);
+    const io::SolveFolder band = read_maps(y0, rows);
     normals.add(normal_colours(band.normals, band.solved));
     const cv::Mat grey_albedo =
         band.albedo.empty() ? cv::Mat(band.solved.size(), CV_32FC1, cv::Scalar(0)) : band.albedo;
@@ -199,8 +219,7 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
     if (sources.depth) {
       // One row more on either side: the relief's slopes at the band's edges.
       const int top = std::max(0, y0 - 1), bottom = std::min(height, y0 + rows + 1);
-      cv::Mat depth;
-      sources.depth->rows->read(top, bottom - top, depth);
+      const cv::Mat depth = read_depth(top, bottom - top);
       const cv::Mat usable = usable_depth(depth, solved.rowRange(top, bottom));
       const cv::Range inner(y0 - top, y0 - top + rows);
       shaded.add(shaded_depth(depth, usable, depth_pictures.pixel_size).rowRange(inner));

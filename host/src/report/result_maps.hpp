@@ -4,7 +4,8 @@
 // without being held: a first pass reads every band (the viewer's subsampled
 // model, the angular error's statistics) and counts the quantiles the pictures
 // are scaled by, a second gathers those quantiles exactly (io::BandQuantile),
-// a third draws every picture into its overview (overview.hpp). Held for the
+// a third draws every picture into its overview (overview.hpp); a result small
+// enough to be one band is read once for all three. Held for the
 // whole image: the solved mask and the ground truth's mask (a byte a pixel)
 // and the compared pixels' errors (a double each, in a vector that grows).
 
@@ -63,6 +64,8 @@ struct MapSources {
 
 // A band's working set, for choosing band_rows.
 inline constexpr std::size_t kReportBandBytes = std::size_t{16} << 20;
+// A result whose maps fit in this are read as one band and kept for every pass (decoded once, not thrice).
+inline constexpr std::size_t kReportKeptBytes = std::size_t{128} << 20;
 
 struct DepthPictures {
   cv::Mat shaded, colour;
