@@ -1,6 +1,7 @@
 #include "lightstage/host/io/solve_output_writer.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/parallel.hpp"
 #include "lightstage/common/version.hpp"
 #include "lightstage/host/io/normal_map.hpp"
 #include "lightstage/host/io/row_reader.hpp"
@@ -14,8 +15,10 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <functional>
 #include <system_error>
 #include <utility>
+#include <vector>
 
 namespace lightstage::io {
 namespace {
@@ -62,6 +65,17 @@ void read_back(const fs::path& file, Visit&& visit) {
   for (int y0 = 0; y0 < reader->size().height; y0 += kReadBackRows) {
     reader->read(y0, std::min(kReadBackRows, reader->size().height - y0), rows);
     visit(rows, y0);
+  }
+}
+
+// Counts the solved pixels' values of `map` (every channel) toward its PNG's white.
+void count_white(BandQuantile& white, const cv::Mat& map, const cv::Mat& solved) {
+  const auto channels = static_cast<std::size_t>(map.channels());
+  for (int y = 0; y < map.rows; ++y) {
+    const auto* lit = solved.ptr<std::uint8_t>(y);
+    const float* values = map.ptr<float>(y);
+    for (int x = 0; x < map.cols; ++x)
+      if (lit[x] != 0) white.count(values + channels * static_cast<std::size_t>(x), channels);
   }
 }
 
@@ -236,45 +250,46 @@ void SolveOutputWriter::write_rows(const SolveResult& band) {
     fail("{}: rows {}-{}: the reflectance model has {} coefficients, the rows above {}", dir_.string(), rows_,
          rows_ + rows - 1, band.coefficients.channels(), coefficient_pfms_.size());
   band.solved.copyTo(solved_.rowRange(rows_, rows_ + rows));
-  normal_png_->write(encode_normal_map(band.normals, band.solved));
-  normal_vis_->write(normal_visualisation(band.normals, band.solved));
-  albedo_pfm_->write(band.albedo);
-  residual_pfm_->write(band.residual);
-  normal_exr_->write(band.normals);
-  albedo_exr_->write(band.albedo);
-  cv::Mat colour;
-  if (colour_) {
-    colour = times_chroma(band.albedo, band.chroma);
-    colour_pfm_->write(colour);
-    colour_exr_->write(colour);
-  }
-  for (int y = 0; y < rows; ++y) {
-    const auto* solved = band.solved.ptr<std::uint8_t>(y);
-    for (int x = 0; x < size_.width; ++x) {
-      if (solved[x] == 0) continue;
-      albedo_white_.count(band.albedo.ptr<float>(y) + x, 1);
-      if (colour_) colour_white_.count(colour.ptr<float>(y) + 3 * x, 3);
-    }
-  }
-  if (confidence_pfm_) confidence_pfm_->write(band.confidence);
-  if (!coefficient_pfms_.empty()) {
-    std::vector<cv::Mat> planes;
-    cv::split(band.coefficients, planes);
-    for (std::size_t c = 0; c < planes.size(); ++c) coefficient_pfms_[c]->write(planes[c]);
-  }
-  if (method_map_) {
-    cv::Mat picture(band.choice.size(), CV_8UC3, cv::Scalar::all(0));
-    for (int y = 0; y < picture.rows; ++y) {
-      for (int x = 0; x < picture.cols; ++x) {
-        const int k = band.choice.at<std::uint8_t>(y, x);
-        if (k == 0 || k > static_cast<int>(choice_counts_.size())) continue;
-        ++choice_counts_[static_cast<std::size_t>(k - 1)];
-        const auto& rgb = kChoiceColours[static_cast<std::size_t>(k - 1)];
-        picture.at<cv::Vec3b>(y, x) = cv::Vec3b(rgb[2], rgb[1], rgb[0]);  // OpenCV stores BGR
+  // Every file is its own writer: they encode side by side (each file's rows still in order).
+  std::vector<std::function<void()>> files;
+  files.emplace_back([&] { normal_png_->write(encode_normal_map(band.normals, band.solved)); });
+  files.emplace_back([&] { normal_vis_->write(normal_visualisation(band.normals, band.solved)); });
+  files.emplace_back([&] { normal_exr_->write(band.normals); });
+  files.emplace_back([&] {
+    albedo_pfm_->write(band.albedo);
+    residual_pfm_->write(band.residual);
+    albedo_exr_->write(band.albedo);
+    count_white(albedo_white_, band.albedo, band.solved);
+    if (confidence_pfm_) confidence_pfm_->write(band.confidence);
+  });
+  if (colour_)
+    files.emplace_back([&] {
+      const cv::Mat colour = times_chroma(band.albedo, band.chroma);
+      colour_pfm_->write(colour);
+      colour_exr_->write(colour);
+      count_white(colour_white_, colour, band.solved);
+    });
+  if (!coefficient_pfms_.empty())
+    files.emplace_back([&] {
+      std::vector<cv::Mat> planes;
+      cv::split(band.coefficients, planes);
+      for (std::size_t c = 0; c < planes.size(); ++c) coefficient_pfms_[c]->write(planes[c]);
+    });
+  if (method_map_)
+    files.emplace_back([&] {
+      cv::Mat picture(band.choice.size(), CV_8UC3, cv::Scalar::all(0));
+      for (int y = 0; y < picture.rows; ++y) {
+        for (int x = 0; x < picture.cols; ++x) {
+          const int k = band.choice.at<std::uint8_t>(y, x);
+          if (k == 0 || k > static_cast<int>(choice_counts_.size())) continue;
+          ++choice_counts_[static_cast<std::size_t>(k - 1)];
+          const auto& rgb = kChoiceColours[static_cast<std::size_t>(k - 1)];
+          picture.at<cv::Vec3b>(y, x) = cv::Vec3b(rgb[2], rgb[1], rgb[0]);  // OpenCV stores BGR
+        }
       }
-    }
-    method_map_->write(picture);
-  }
+      method_map_->write(picture);
+    });
+  parallel_for(static_cast<int>(files.size()), 0, [&](int i) { files[static_cast<std::size_t>(i)](); });
   rows_ += rows;
 }
 
