@@ -1,6 +1,7 @@
 #include "lightstage/host/radiometry.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/huge_pages.hpp"
 #include "lightstage/common/parallel.hpp"
 
 #include <algorithm>
@@ -27,6 +28,9 @@ struct FrameConstants {
   double scale = 1, saturation = 0, black = 0;
   Vec3 intensity = Vec3::Ones();  // r, g, b
   double grey_intensity = 1;
+  // 1 / (scale · intensity): a product per value instead of two quotients.
+  Vec3 gain = Vec3::Ones();
+  double grey_gain = 1;
 };
 
 FrameConstants frame_constants(const Frame& frame, const cv::Mat* dark) {
@@ -42,6 +46,8 @@ FrameConstants frame_constants(const Frame& frame, const cv::Mat* dark) {
   // The BT.601 weights sum to 0.9999: normalise so that a grey light of 1 divides by exactly 1.
   k.grey_intensity =
       (kRed * k.intensity.x() + kGreen * k.intensity.y() + kBlue * k.intensity.z()) / (kRed + kGreen + kBlue);
+  k.gain = (k.scale * k.intensity).cwiseInverse();
+  k.grey_gain = 1.0 / (k.scale * k.grey_intensity);
   return k;
 }
 
@@ -53,7 +59,7 @@ void convert_frame(const FrameConstants& k, const std::vector<cv::Point>& pixels
                    std::size_t end, bool clamp_to_one, Eigen::Index column, ObservationMatrix& values,
                    FlagMatrix& saturated, float* rgb, std::size_t frame_count) {
   const cv::Mat& image = *k.image;
-  const double scale = k.scale, saturation = k.saturation;
+  const double saturation = k.saturation;
   constexpr int kChannels = kColour ? 3 : 1;
   const double scalar_black[3] = {k.black, k.black, k.black};
   for (std::size_t p = begin; p < end; ++p) {
@@ -71,9 +77,9 @@ void convert_frame(const FrameConstants& k, const std::vector<cv::Point>& pixels
       const double b = static_cast<double>(px[0]), g = static_cast<double>(px[1]),
                    r = static_cast<double>(px[2]);
       clipped = b >= saturation || g >= saturation || r >= saturation;
-      const double red = (r - black[2]) / scale / k.intensity.x();
-      const double green = (g - black[1]) / scale / k.intensity.y();
-      const double blue = (b - black[0]) / scale / k.intensity.z();
+      const double red = (r - black[2]) * k.gain.x();
+      const double green = (g - black[1]) * k.gain.y();
+      const double blue = (b - black[0]) * k.gain.z();
       value = kRed * red + kGreen * green + kBlue * blue;
       float* out = rgb + ((p - begin) * frame_count + static_cast<std::size_t>(column)) * 3;
       out[0] = static_cast<float>(red);
@@ -82,7 +88,7 @@ void convert_frame(const FrameConstants& k, const std::vector<cv::Point>& pixels
     } else {
       const double v = static_cast<double>(px[0]);
       clipped = v >= saturation;
-      value = (v - black[0]) / scale / k.grey_intensity;
+      value = (v - black[0]) * k.grey_gain;
     }
     if (clamp_to_one) value = std::min(value, 1.0);
     const auto row = static_cast<Eigen::Index>(p);
@@ -213,6 +219,8 @@ Observations make_observations(const ImageStack& stack, const RadiometryOptions&
   const auto rows = static_cast<Eigen::Index>(obs.pixels.size());
   obs.intensities.resize(rows, images);
   obs.saturated.resize(rows, images);
+  advise_huge_pages(obs.intensities.data(), static_cast<std::size_t>(obs.intensities.size()) * sizeof(float));
+  advise_huge_pages(obs.saturated.data(), static_cast<std::size_t>(obs.saturated.size()));
   obs.lights.resize(images, 3);
   for (Eigen::Index j = 0; j < images; ++j) {
     obs.lights.row(j) = stack.frames[static_cast<std::size_t>(j)].light_direction.normalized().transpose();
