@@ -11,19 +11,20 @@ void near_light_directions(const NearLights& near, std::size_t pixel, Eigen::Mat
   gains.resize(n);
   const Eigen::MatrixX3d& leds = near.led_positions_mm;
   const Eigen::Index row = static_cast<Eigen::Index>(pixel);
-  const double x = near.points_mm(row, 0), y = near.points_mm(row, 1), z = near.points_mm(row, 2);
   const Eigen::Vector3d& c = near.object_centre_mm;
-  // Squared distances throughout: one square root a light (this runs for every pixel and light).
-  for (Eigen::Index j = 0; j < n; ++j) {
-    const double dx = leds(j, 0) - x, dy = leds(j, 1) - y, dz = leds(j, 2) - z;
-    const double cx = leds(j, 0) - c.x(), cy = leds(j, 1) - c.y(), cz = leds(j, 2) - c.z();
-    const double d2 = dx * dx + dy * dy + dz * dz;
-    const double inverse_d = 1.0 / std::sqrt(d2);
-    directions(j, 0) = dx * inverse_d;
-    directions(j, 1) = dy * inverse_d;
-    directions(j, 2) = dz * inverse_d;
-    gains(j) = (cx * cx + cy * cy + cz * cz) / d2;
-  }
+  // Whole columns at a time (SIMD lanes of lights), squared distances throughout: one square root a light
+  // (this runs for every pixel and light).
+  const auto dx = leds.col(0).array() - near.points_mm(row, 0);
+  const auto dy = leds.col(1).array() - near.points_mm(row, 1);
+  const auto dz = leds.col(2).array() - near.points_mm(row, 2);
+  gains = dx * dx + dy * dy + dz * dz;                 // d², until the last line
+  directions.col(2) = gains.array().sqrt().inverse();  // 1 / d, until the line below
+  directions.col(0) = dx * directions.col(2).array();
+  directions.col(1) = dy * directions.col(2).array();
+  directions.col(2).array() *= dz;
+  const auto cx = leds.col(0).array() - c.x(), cy = leds.col(1).array() - c.y(),
+             cz = leds.col(2).array() - c.z();
+  gains = (cx * cx + cy * cy + cz * cz) / gains.array();
 }
 
 Eigen::MatrixX3d points_on_plane(const std::vector<cv::Point>& pixels, const PixelRay& ray, double plane_z_mm,

@@ -114,6 +114,7 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
     Eigen::MatrixX3d near_directions;
     Eigen::VectorXd near_gains;
     Eigen::VectorXf corrected(images);
+    Eigen::VectorXd every_value(images), fitted(images);
     detail::ProgressBatch batch(options.progress);
     for (std::size_t p = begin; p < end; ++p) {
       batch.tick();
@@ -143,12 +144,20 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
         ++counters.too_few;
         continue;
       }
+      // Every light kept (l2's default): the sums as matrix products, not a light at a time.
+      const bool every = kept.size() == static_cast<std::size_t>(images);
       Eigen::Matrix3d gram = Eigen::Matrix3d::Zero();
       Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-      for (const Eigen::Index j : kept) {
-        const Eigen::Vector3d l = lights.row(j).transpose();
-        gram += l * l.transpose();
-        rhs += static_cast<double>(row(j)) * l;
+      if (every) {
+        every_value = row.cast<double>();
+        gram.noalias() = lights.transpose().lazyProduct(lights);
+        rhs.noalias() = lights.transpose() * every_value;
+      } else {
+        for (const Eigen::Index j : kept) {
+          const Eigen::Vector3d l = lights.row(j).transpose();
+          gram += l * l.transpose();
+          rhs += static_cast<double>(row(j)) * l;
+        }
       }
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
       eigen.computeDirect(gram);
@@ -160,9 +169,14 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
       const Eigen::Matrix3d& v = eigen.eigenvectors();
       const Eigen::Vector3d s = v * (v.transpose() * rhs).cwiseQuotient(lambda);
       double squared = 0;
-      for (const Eigen::Index j : kept) {
-        const double r = lights.row(j).dot(s) - static_cast<double>(row(j));
-        squared += r * r;
+      if (every) {
+        fitted.noalias() = lights * s;
+        squared = (fitted - every_value).squaredNorm();
+      } else {
+        for (const Eigen::Index j : kept) {
+          const double r = lights.row(j).dot(s) - static_cast<double>(row(j));
+          squared += r * r;
+        }
       }
       if (store(s, std::sqrt(squared / static_cast<double>(kept.size())), obs.pixels[p], maps)) {
         ++counters.solved;

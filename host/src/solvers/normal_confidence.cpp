@@ -17,18 +17,25 @@ namespace {
 // largest eigenvalue) leave the normal undetermined.
 constexpr double kMinEigenvalueRatio = 1e-6;
 
+// A pixel's working vectors, kept from pixel to pixel.
+struct Scratch {
+  Eigen::VectorXd shading, weight;
+  Eigen::MatrixX3d weighted;
+};
+
 double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, double albedo,
-                     double method_residual, const ConfidenceOptions& options) {
-  Eigen::Matrix3d gram = Eigen::Matrix3d::Zero();
+                     double method_residual, const ConfidenceOptions& options, Scratch& scratch) {
+  scratch.shading.noalias() = data.lights * n;
+  scratch.weight.resize(data.count());
   double lit_sum = 0, lambert_squared = 0;
   int lit = 0;
   for (Eigen::Index j = 0; j < data.count(); ++j) {
-    const double value = data.values(j);
-    if (!data.usable[static_cast<std::size_t>(j)] || !(value > options.shadow_threshold)) continue;
-    const Eigen::Vector3d l = data.lights.row(j).transpose();
-    const double shading = n.dot(l);
-    if (shading <= 0) continue;  // lit, but from behind the answer: the model has no slope there
-    gram += l * l.transpose();
+    const double value = data.values(j), shading = scratch.shading(j);
+    // Lit, and not from behind the answer (the model has no slope there).
+    const bool counted =
+        data.usable[static_cast<std::size_t>(j)] && value > options.shadow_threshold && shading > 0;
+    scratch.weight(j) = counted ? 1.0 : 0.0;
+    if (!counted) continue;
     lit_sum += value;
     const double r = value - albedo * shading;
     lambert_squared += r * r;
@@ -36,6 +43,9 @@ double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, do
   }
   const double infinite = std::numeric_limits<double>::infinity();
   if (lit < 3 || !(albedo > 0)) return infinite;
+  // The counted lights' Gram matrix, as one product.
+  scratch.weighted.noalias() = scratch.weight.asDiagonal() * data.lights;
+  const Eigen::Matrix3d gram = scratch.weighted.transpose().lazyProduct(data.lights);
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
   eigen.computeDirect(gram);
   const Eigen::Vector3d lambda = eigen.eigenvalues();
@@ -83,6 +93,7 @@ cv::Mat predict_normal_error(const Observations& observations, const SolveResult
   parallel_chunks(
       observations.pixel_count(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
         PixelObservations data;
+        Scratch scratch;
         for (std::size_t p = begin; p < end; ++p) {
           const cv::Point& at = observations.pixels[p];
           if (result.solved.at<std::uint8_t>(at) == 0) continue;
@@ -93,7 +104,7 @@ cv::Mat predict_normal_error(const Observations& observations, const SolveResult
           const double residual =
               has_residual ? result.residual.at<float>(at) : std::numeric_limits<double>::quiet_NaN();
           error.at<float>(at) = static_cast<float>(
-              predict_pixel(data, n.normalized(), result.albedo.at<float>(at), residual, options));
+              predict_pixel(data, n.normalized(), result.albedo.at<float>(at), residual, options, scratch));
         }
       });
   return error;
