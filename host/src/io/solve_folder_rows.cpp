@@ -1,6 +1,7 @@
 #include "lightstage/host/io/solve_folder_rows.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/parallel.hpp"
 #include "lightstage/host/io/exr.hpp"
 #include "lightstage/host/io/normal_map.hpp"
 #include "lightstage/host/io/row_reader.hpp"
@@ -10,6 +11,8 @@
 
 #include <cmath>
 #include <fstream>
+#include <functional>
+#include <vector>
 
 namespace lightstage::io {
 
@@ -146,17 +149,28 @@ std::size_t SolveFolderRows::bytes_per_pixel() const {
 
 SolveFolder SolveFolderRows::read(int y0, int rows) {
   SolveFolder band = facts_;
-  cv::Mat encoded;
-  normal_png_->read(y0, rows, encoded);
-  const DecodedNormals normals = decode_normal_map(encoded, normal_png_->path().string());
+  // Each file decodes beside the others (normal.png and normal.exr are most of the work).
+  DecodedNormals normals;
+  cv::Mat exact;
+  std::vector<std::function<void()>> files;
+  files.emplace_back([&] {
+    cv::Mat encoded;
+    normal_png_->read(y0, rows, encoded);
+    normals = decode_normal_map(encoded, normal_png_->path().string());
+  });
+  if (normal_exr_) files.emplace_back([&] { normal_exr_->read(y0, rows, exact); });
+  files.emplace_back([&] { read_maps(y0, rows, band); });
+  parallel_for(static_cast<int>(files.size()), 0, [&](int i) { files[static_cast<std::size_t>(i)](); });
   band.normals = normals.normals;
   band.solved = normals.valid;
   if (normal_exr_) {
-    cv::Mat exact;
-    normal_exr_->read(y0, rows, exact);
     band.normals = cv::Mat(band.solved.size(), CV_32FC3, cv::Scalar::all(0));
     exact.copyTo(band.normals, band.solved);
   }
+  return band;
+}
+
+void SolveFolderRows::read_maps(int y0, int rows, SolveFolder& band) {
   if (albedo_pfm_) {
     albedo_pfm_->read(y0, rows, band.albedo);
   } else if (albedo_png_) {
@@ -183,7 +197,6 @@ SolveFolder SolveFolderRows::read(int y0, int rows) {
     for (std::size_t i = 0; i < planes.size(); ++i) coefficients_[i]->read(y0, rows, planes[i]);
     cv::merge(planes, band.coefficients);
   }
-  return band;
 }
 
 }  // namespace lightstage::io

@@ -2,6 +2,7 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
+#include "lightstage/common/parallel.hpp"
 #include "lightstage/common/version.hpp"
 #include "lightstage/host/calibration/light_calibration.hpp"
 #include "lightstage/host/eval/angular_error.hpp"
@@ -29,7 +30,9 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <numbers>
+#include <vector>
 
 namespace lightstage::report {
 
@@ -673,11 +676,25 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
                     size.width, size.height, pictures.factor, pictures.factor, pictures.factor,
                     options.picture_max_pixels));
 
+  // The sections of pictures encode their PNGs, the viewer its payload: side by side.
+  std::string viewer_html, surface_html, depth_html, residual_html, error_html;
+  const std::vector<std::function<void()>> encoded = {
+      [&] { viewer_html = viewer_section(pictures.viewer, in); },
+      [&] { surface_html = surface_section(pictures); },
+      [&] {
+        if (pictures.depth) depth_html = depth_section(*pictures.depth, depth_unit, 0);
+      },
+      [&] { residual_html = residual_section(in, pictures); },
+      [&] {
+        if (pictures.error) error_html = error_section(*pictures.error, sources.truth->source);
+      }};
+  parallel_for(static_cast<int>(encoded.size()), 0, [&](int i) { encoded[static_cast<std::size_t>(i)](); });
+
   Page page;
   // The viewer first: it is what people come for.
-  page.section("viewer", "Relighting viewer", viewer_section(pictures.viewer, in));
-  page.section("surface", "Normals and albedo", surface_section(pictures));
-  if (pictures.depth) page.section("depth", "Depth", depth_section(*pictures.depth, depth_unit, 0));
+  page.section("viewer", "Relighting viewer", viewer_html);
+  page.section("surface", "Normals and albedo", surface_html);
+  if (pictures.depth) page.section("depth", "Depth", depth_html);
 
   if (const std::string lights = lights_section(in); !lights.empty()) {
     page.section("lights", "Lights on the hemisphere", lights);
@@ -695,14 +712,13 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
   }
 
   in.notes.insert(in.notes.end(), method_notes.begin(), method_notes.end());
-  if (const std::string html = residual_section(in, pictures); !html.empty())
-    page.section("residual", "Residual and confidence", html);
+  if (!residual_html.empty())
+    page.section("residual", "Residual and confidence", residual_html);
   else
     in.notes.push_back("No residual.pfm or confidence.pfm in the result folder.");
 
   if (pictures.error)
-    page.section("error", "Angular error against ground truth",
-                 error_section(*pictures.error, sources.truth->source));
+    page.section("error", "Angular error against ground truth", error_html);
   else
     in.notes.push_back("No ground truth (Normal_gt.png in the input stack, or --gt): no error map.");
 

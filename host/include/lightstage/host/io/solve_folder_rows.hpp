@@ -40,6 +40,9 @@ class SolveFolderRows {
   SolveFolder read(int y0, int rows);
 
  private:
+  // Every map but the normals, rows [y0, y0 + rows), into `band`.
+  void read_maps(int y0, int rows, SolveFolder& band);
+
   SolveFolder facts_;
   cv::Size size_;
   std::unique_ptr<RowReader> normal_png_, normal_exr_, albedo_pfm_, albedo_png_, colour_, residual_,
