@@ -16,7 +16,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <system_error>
@@ -232,14 +234,31 @@ ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
   const std::size_t count = stack.frames.size();
   const cv::Size declared_size(static_cast<int>(declared.width), static_cast<int>(declared.height));
   const fs::path first_path = dir / stack.frames.front().filename;
+  // The ground truth's normals (the largest file after the frames) decode beside them, first so that no
+  // thread waits on it at the end; errors are raised afterwards in the order the files are checked.
+  const fs::path normals_path = dir / "Normal_gt.png";
+  const bool truth_beside = options.frame_pixels && options.load_ground_truth && file_exists(normals_path);
+  std::optional<DecodedNormals> truth_normals;
+  std::vector<std::exception_ptr> errors(count + 1);  // the frames', then the ground truth's
   if (options.frame_pixels) {
-    parallel_chunks(count, options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-      for (std::size_t i = begin; i < end; ++i) {
-        const fs::path path = dir / stack.frames[i].filename;
-        stack.frames[i].image = read_image(path);
-        check_finite_pixels(path, stack.frames[i].image);
+    const int first = truth_beside ? -1 : 0;
+    parallel_for(static_cast<int>(count) - first, options.threads, [&](int item) {
+      const int i = item + first;
+      const std::size_t slot = i < 0 ? count : static_cast<std::size_t>(i);
+      try {
+        if (i < 0) {
+          truth_normals = read_normal_map(normals_path);
+          return;
+        }
+        const fs::path path = dir / stack.frames[slot].filename;
+        stack.frames[slot].image = read_image(path);
+        check_finite_pixels(path, stack.frames[slot].image);
+      } catch (...) {
+        errors[slot] = std::current_exception();
       }
     });
+    for (std::size_t i = 0; i < count; ++i)
+      if (errors[i]) std::rethrow_exception(errors[i]);
     const cv::Mat& image0 = stack.frames.front().image;
     for (const auto& frame : stack.frames) {
       const fs::path path = dir / frame.filename;
@@ -267,12 +286,12 @@ ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
   }
 
   if (options.load_ground_truth) {
-    const fs::path normals_path = dir / "Normal_gt.png";
     const fs::path depth_path = dir / "depth_gt.pfm";
     GroundTruth truth;
     if (file_exists(normals_path)) {
       check_declared_size(normals_path, declared, "ground truth");
-      auto decoded = read_normal_map(normals_path);
+      if (errors[count]) std::rethrow_exception(errors[count]);
+      auto decoded = truth_normals ? std::move(*truth_normals) : read_normal_map(normals_path);
       if (decoded.normals.size() != first.size()) {
         fail("{}: ground truth is {}, images are {}", normals_path.string(), size_text(decoded.normals),
              size_text(first));
