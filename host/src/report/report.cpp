@@ -587,13 +587,16 @@ std::size_t report_memory_bytes(int width, int height, const ReportOptions& opti
   constexpr std::size_t kPictureBytes = 48;
   // Per viewer pixel: its model (normals, albedo, chroma, up to 10 coefficients) and its payload.
   constexpr std::size_t kViewerBytes = 12 + 1 + 4 + 12 + 40 + 60;
-  // A band's maps, or the whole result's when they fit kReportKeptBytes (result_maps.hpp): at most ~150 bytes
-  // a pixel (every map, ten coefficients, depth, truth, error and the pictures).
-  constexpr std::size_t kKeptPixelBytes = 150;
+  // A band of the maps, or all of them when they fit kReportKeptBytes (result_maps.hpp): from 83 bytes a
+  // pixel (normal.png alone, with the truth, error and pictures) to 213 (every map, ten coefficients).
+  constexpr std::size_t kMapPixelBytesLeast = 83, kMapPixelBytesMost = 213;
   const auto pixels =
       static_cast<std::size_t>(std::max(width, 0)) * static_cast<std::size_t>(std::max(height, 0));
-  return pixels * kWholeImageBytes +
-         std::max(kReportBandBytes, std::min(pixels * kKeptPixelBytes, kReportKeptBytes)) +
+  const std::size_t maps =
+      pixels * kMapPixelBytesLeast <= kReportKeptBytes
+          ? std::max(kReportBandBytes, std::min(pixels * kMapPixelBytesMost, kReportKeptBytes))
+          : kReportBandBytes;
+  return pixels * kWholeImageBytes + maps +
          std::min(pixels, static_cast<std::size_t>(options.picture_max_pixels)) * kPictureBytes +
          std::min(pixels, static_cast<std::size_t>(options.viewer_max_pixels)) * kViewerBytes;
 }
