@@ -12,7 +12,9 @@ void advise_huge_pages(void* data, std::size_t bytes) {
   const std::uintptr_t first = (start + kHugePage - 1) & ~(kHugePage - 1);
   const std::uintptr_t last = (start + bytes) & ~(kHugePage - 1);
   if (data == nullptr || last <= first) return;
+#ifdef MADV_HUGEPAGE
   madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+#endif
 }
 
 }  // namespace lightstage

@@ -64,4 +64,19 @@ void parallel_for(int n, int threads, const std::function<void(int)>& body) {
   if (error) std::rethrow_exception(error);
 }
 
+void parallel_invoke(const std::vector<std::function<void()>>& tasks, int threads) {
+  std::vector<std::exception_ptr> errors(tasks.size());
+  parallel_for(static_cast<int>(tasks.size()), threads, [&](int i) {
+    const auto task = static_cast<std::size_t>(i);
+    try {
+      tasks[task]();
+    } catch (...) {
+      errors[task] = std::current_exception();
+    }
+  });
+  for (const auto& error : errors) {
+    if (error) std::rethrow_exception(error);
+  }
+}
+
 }  // namespace lightstage

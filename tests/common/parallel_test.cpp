@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
+#include <functional>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -173,6 +175,32 @@ TEST(ParallelFor, StartsNoFurtherIndexAfterAFailure) {
   }
   EXPECT_THAT(ran, ElementsAre(0, 1, 2, 3));
 }
+
+TEST(ParallelInvoke, RunsEveryTaskOnceEvenAfterAFailureAndRethrowsTheFirstByTaskOrder) {
+  for (const int threads : {1, 2, 4}) {
+    std::vector<std::atomic<int>> ran(6);
+    std::vector<std::function<void()>> tasks;
+    for (int t = 0; t < 6; ++t)
+      tasks.emplace_back([&ran, t] {
+        ++ran[static_cast<std::size_t>(t)];
+        // The later task fails at once, the earlier one only after it: timing alone would name task 4.
+        if (t == 4) throw std::runtime_error("task 4");
+        if (t == 1) {
+          std::this_thread::sleep_for(std::chrono::milliseconds(20));
+          throw std::runtime_error("task 1");
+        }
+      });
+    try {
+      parallel_invoke(tasks, threads);
+      FAIL() << "no exception";
+    } catch (const std::runtime_error& e) {
+      EXPECT_STREQ(e.what(), "task 1") << threads << " threads";
+    }
+    for (const auto& count : ran) EXPECT_EQ(count.load(), 1) << threads << " threads";
+  }
+}
+
+TEST(ParallelInvoke, DoesNothingWithoutTasks) { EXPECT_NO_THROW(parallel_invoke({}, 2)); }
 
 }  // namespace
 }  // namespace lightstage

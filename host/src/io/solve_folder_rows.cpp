@@ -160,7 +160,7 @@ SolveFolder SolveFolderRows::read(int y0, int rows) {
   });
   if (normal_exr_) files.emplace_back([&] { normal_exr_->read(y0, rows, exact); });
   files.emplace_back([&] { read_maps(y0, rows, band); });
-  parallel_for(static_cast<int>(files.size()), 0, [&](int i) { files[static_cast<std::size_t>(i)](); });
+  parallel_invoke(files, 0);
   band.normals = normals.normals;
   band.solved = normals.valid;
   if (normal_exr_) {

@@ -250,7 +250,7 @@ void SolveOutputWriter::write_rows(const SolveResult& band) {
     fail("{}: rows {}-{}: the reflectance model has {} coefficients, the rows above {}", dir_.string(), rows_,
          rows_ + rows - 1, band.coefficients.channels(), coefficient_pfms_.size());
   band.solved.copyTo(solved_.rowRange(rows_, rows_ + rows));
-  // Every file is its own writer: they encode side by side (each file's rows still in order).
+  // The files encode side by side (the float maps together; each file's rows still in order).
   std::vector<std::function<void()>> files;
   files.emplace_back([&] { normal_png_->write(encode_normal_map(band.normals, band.solved)); });
   files.emplace_back([&] { normal_vis_->write(normal_visualisation(band.normals, band.solved)); });
@@ -289,7 +289,7 @@ void SolveOutputWriter::write_rows(const SolveResult& band) {
       }
       method_map_->write(picture);
     });
-  parallel_for(static_cast<int>(files.size()), 0, [&](int i) { files[static_cast<std::size_t>(i)](); });
+  parallel_invoke(files, 0);
   rows_ += rows;
 }
 

@@ -247,6 +247,7 @@ ImageStack load_stack(const fs::path& dir, const LoadOptions& options) {
       const std::size_t slot = i < 0 ? count : static_cast<std::size_t>(i);
       try {
         if (i < 0) {
+          check_declared_size(normals_path, declared, "ground truth");  // before decoding it
           truth_normals = read_normal_map(normals_path);
           return;
         }

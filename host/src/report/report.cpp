@@ -588,8 +588,9 @@ std::size_t report_memory_bytes(int width, int height, const ReportOptions& opti
   // Per viewer pixel: its model (normals, albedo, chroma, up to 10 coefficients) and its payload.
   constexpr std::size_t kViewerBytes = 12 + 1 + 4 + 12 + 40 + 60;
   // A band of the maps, or all of them when they fit kReportKeptBytes (result_maps.hpp): from 83 bytes a
-  // pixel (normal.png alone, with the truth, error and pictures) to 213 (every map, ten coefficients).
-  constexpr std::size_t kMapPixelBytesLeast = 83, kMapPixelBytesMost = 213;
+  // pixel (normal.png alone, with the truth, error and pictures) to 269 (every map, bicubic's 17
+  // coefficients).
+  constexpr std::size_t kMapPixelBytesLeast = 83, kMapPixelBytesMost = 269;
   const auto pixels =
       static_cast<std::size_t>(std::max(width, 0)) * static_cast<std::size_t>(std::max(height, 0));
   const std::size_t maps =
@@ -691,7 +692,7 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
       [&] {
         if (pictures.error) error_html = error_section(*pictures.error, sources.truth->source);
       }};
-  parallel_for(static_cast<int>(encoded.size()), 0, [&](int i) { encoded[static_cast<std::size_t>(i)](); });
+  parallel_invoke(encoded, 0);
 
   Page page;
   // The viewer first: it is what people come for.

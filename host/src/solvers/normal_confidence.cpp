@@ -17,16 +17,16 @@ namespace {
 // largest eigenvalue) leave the normal undetermined.
 constexpr double kMinEigenvalueRatio = 1e-6;
 
-// A pixel's working vectors, kept from pixel to pixel.
+// A pixel's working arrays, kept from pixel to pixel.
 struct Scratch {
-  Eigen::VectorXd shading, weight;
-  Eigen::MatrixX3d weighted;
+  Eigen::VectorXd shading;
+  Eigen::MatrixX3d counted;  // the counted lights' rows, zero elsewhere
 };
 
 double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, double albedo,
                      double method_residual, const ConfidenceOptions& options, Scratch& scratch) {
   scratch.shading.noalias() = data.lights * n;
-  scratch.weight.resize(data.count());
+  scratch.counted.resize(data.count(), 3);
   double lit_sum = 0, lambert_squared = 0;
   int lit = 0;
   for (Eigen::Index j = 0; j < data.count(); ++j) {
@@ -34,8 +34,11 @@ double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, do
     // Lit, and not from behind the answer (the model has no slope there).
     const bool counted =
         data.usable[static_cast<std::size_t>(j)] && value > options.shadow_threshold && shading > 0;
-    scratch.weight(j) = counted ? 1.0 : 0.0;
-    if (!counted) continue;
+    if (!counted) {
+      scratch.counted.row(j).setZero();
+      continue;
+    }
+    scratch.counted.row(j) = data.lights.row(j);
     lit_sum += value;
     const double r = value - albedo * shading;
     lambert_squared += r * r;
@@ -43,9 +46,8 @@ double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, do
   }
   const double infinite = std::numeric_limits<double>::infinity();
   if (lit < 3 || !(albedo > 0)) return infinite;
-  // The counted lights' Gram matrix, as one product.
-  scratch.weighted.noalias() = scratch.weight.asDiagonal() * data.lights;
-  const Eigen::Matrix3d gram = scratch.weighted.transpose().lazyProduct(data.lights);
+  // The counted lights' Gram matrix, as one product (a light not counted adds zeros, whatever its row).
+  const Eigen::Matrix3d gram = scratch.counted.transpose().lazyProduct(scratch.counted);
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
   eigen.computeDirect(gram);
   const Eigen::Vector3d lambda = eigen.eigenvalues();

@@ -6,10 +6,11 @@
 //   order and give the same total for a given thread count;
 // - parallel_for: indices handed out one at a time, for work whose cost varies
 //   by index (image rows); results must not depend on which thread ran which
-//   index.
+//   index. parallel_invoke hands out different tasks the same way.
 
 #include <cstddef>
 #include <functional>
+#include <vector>
 
 namespace lightstage {
 
@@ -29,5 +30,11 @@ std::size_t parallel_chunks(
 // `threads` threads (resolve_threads). After an exception no further index is
 // started; the first exception thrown is rethrown on the caller's thread.
 void parallel_for(int n, int threads, const std::function<void(int)>& body);
+
+// Runs every task once, side by side on up to `threads` threads (a task is
+// handed to the next free thread). Every task runs to its end; the exception
+// of the first failed task, by task order, is rethrown on the caller's thread
+// (so the error a user sees does not depend on timing).
+void parallel_invoke(const std::vector<std::function<void()>>& tasks, int threads);
 
 }  // namespace lightstage
