@@ -310,7 +310,7 @@ SolveReport write_band_solve(const std::filesystem::path& input, const std::file
   }
   report.summary = writer.finish(result, input, extra);
   logger("host")->info("{}", result.summary.message);
-  write_result_report(out, input, /*light_statistics=*/extra.contains("light_statistics"));
+  write_result_report(out, input, /*light_statistics=*/extra.contains("light_statistics"), /*in_bands=*/true);
   return report;
 }
 

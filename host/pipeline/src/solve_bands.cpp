@@ -80,6 +80,10 @@ BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit, int
     plan.bands = 1;
     return plan;
   }
+  // In bands the report reads the maps a band at a time too (write_result_report).
+  report::ReportOptions banded_report;
+  banded_report.kept_map_bytes = 0;
+  plan.report_bytes = kProcessBytes + report::report_memory_bytes(size.width, size.height, banded_report);
   if (memory_limit < plan.fixed_bytes + plan.row_bytes)
     fail(
         "--memory-limit {}: too small for this stack ({}x{}, {} images): what is held for the whole image "

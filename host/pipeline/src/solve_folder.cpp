@@ -19,13 +19,17 @@
 namespace lightstage::pipeline {
 
 void write_result_report(const std::filesystem::path& result_dir, const std::filesystem::path& input,
-                         bool light_statistics) {
+                         bool light_statistics, bool in_bands) {
   const std::filesystem::path file = result_dir / "report.html";
   return_free_memory();  // what the solve freed is the report's now
   try {
     report::ReportOptions options;
     options.stack = input;
     options.light_statistics = light_statistics;
+    if (in_bands) {  // within --memory-limit: no maps kept, one section at a time
+      options.kept_map_bytes = 0;
+      options.threads = 1;
+    }
     const auto written = report::write_report(result_dir, file, options);
     logger("host")->info("report: {} ({:.1f} MB)", written.file.string(),
                          static_cast<double>(written.bytes) / 1e6);

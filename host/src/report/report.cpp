@@ -572,6 +572,7 @@ void ReportOptions::check() const {
   if (viewer_max_pixels < 1) fail("report: viewer_max_pixels must be ≥ 1, got {}", viewer_max_pixels);
   if (picture_max_pixels < 1) fail("report: picture_max_pixels must be ≥ 1, got {}", picture_max_pixels);
   if (band_rows < 0) fail("report: band_rows must be ≥ 0, got {}", band_rows);
+  if (threads < 0) fail("report: threads must be 0 (every core) or positive, got {}", threads);
   if (shadow_threshold && (!(*shadow_threshold >= 0) || !std::isfinite(*shadow_threshold)))
     fail("report: shadow_threshold must be a number ≥ 0, got {}", *shadow_threshold);
   if (ground_truth && !fs::exists(*ground_truth))
@@ -587,15 +588,15 @@ std::size_t report_memory_bytes(int width, int height, const ReportOptions& opti
   constexpr std::size_t kPictureBytes = 48;
   // Per viewer pixel: its model (normals, albedo, chroma, up to 10 coefficients) and its payload.
   constexpr std::size_t kViewerBytes = 12 + 1 + 4 + 12 + 40 + 60;
-  // A band of the maps, or all of them when they fit kReportKeptBytes (result_maps.hpp): from 83 bytes a
-  // pixel (normal.png alone, with the truth, error and pictures) to 269 (every map, bicubic's 17
+  // A band of the maps, or all of them when they fit options.kept_map_bytes (result_maps.hpp): from 83 bytes
+  // a pixel (normal.png alone, with the truth, error and pictures) to 269 (every map, bicubic's 17
   // coefficients).
   constexpr std::size_t kMapPixelBytesLeast = 83, kMapPixelBytesMost = 269;
   const auto pixels =
       static_cast<std::size_t>(std::max(width, 0)) * static_cast<std::size_t>(std::max(height, 0));
   const std::size_t maps =
-      pixels * kMapPixelBytesLeast <= kReportKeptBytes
-          ? std::max(kReportBandBytes, std::min(pixels * kMapPixelBytesMost, kReportKeptBytes))
+      pixels * kMapPixelBytesLeast <= options.kept_map_bytes
+          ? std::max(kReportBandBytes, std::min(pixels * kMapPixelBytesMost, options.kept_map_bytes))
           : kReportBandBytes;
   return pixels * kWholeImageBytes + maps +
          std::min(pixels, static_cast<std::size_t>(options.picture_max_pixels)) * kPictureBytes +
@@ -620,6 +621,7 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
   MapSources sources;
   sources.folder = &folder;
   sources.band_rows = options.band_rows;
+  sources.kept_bytes = options.kept_map_bytes;
   sources.picture_max_pixels = options.picture_max_pixels;
   sources.viewer_max_pixels = options.viewer_max_pixels;
   sources.albedo_scale = in.summary.value(
@@ -692,7 +694,7 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
       [&] {
         if (pictures.error) error_html = error_section(*pictures.error, sources.truth->source);
       }};
-  parallel_invoke(encoded, 0);
+  parallel_invoke(encoded, options.threads);
 
   Page page;
   // The viewer first: it is what people come for.

@@ -97,7 +97,7 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   const std::size_t band_bytes = folder.bytes_per_pixel() + 64;  // + depth, truth, error and the pictures
   const std::size_t row_bytes = band_bytes * static_cast<std::size_t>(size.width);
   const bool whole_kept =
-      sources.band_rows <= 0 && row_bytes * static_cast<std::size_t>(height) <= kReportKeptBytes;
+      sources.band_rows <= 0 && row_bytes * static_cast<std::size_t>(height) <= sources.kept_bytes;
   out.band_rows = sources.band_rows > 0 ? sources.band_rows
                   : whole_kept          ? height
                                : static_cast<int>(std::clamp<std::size_t>(kReportBandBytes / row_bytes, 1,

@@ -58,14 +58,13 @@ struct MapSources {
   std::unique_ptr<TruthRows> truth;           // or none
   double albedo_scale = 0;                    // the albedo picture's white; ≤ 0: its 99.5th percentile
   int band_rows = 0;                          // 0: as many as fit kReportBandBytes
+  std::size_t kept_bytes = 0;                 // maps that fit are one band, read once (ReportOptions)
   int picture_max_pixels = 1 << 21;
   int viewer_max_pixels = 1 << 20;
 };
 
 // A band's working set, for choosing band_rows.
 inline constexpr std::size_t kReportBandBytes = std::size_t{16} << 20;
-// A result whose maps fit in this are read as one band and kept for every pass (decoded once, not thrice).
-inline constexpr std::size_t kReportKeptBytes = std::size_t{128} << 20;
 
 struct DepthPictures {
   cv::Mat shaded, colour;

@@ -51,6 +51,13 @@ struct ReportOptions {
   // few tens of megabytes (result_maps.hpp), so that a result larger than
   // memory is reported from its files.
   int band_rows = 0;
+  // With band_rows 0, maps that fit in this many bytes are read once and
+  // kept for the report's three passes instead of decoded for each; 0 = read
+  // a band at a time always (a solve under --memory-limit).
+  std::size_t kept_map_bytes = std::size_t{128} << 20;
+  // The page's sections (their pictures, the viewer's payload) are made side
+  // by side on this many threads (0 = every core); 1 holds one at a time.
+  int threads = 0;
 
   void check() const;  // throws InputError naming the field and value
 };

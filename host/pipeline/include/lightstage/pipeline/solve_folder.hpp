@@ -87,9 +87,12 @@ SolveReport solve_folder(const std::filesystem::path& input, const SolveSettings
 
 // Writes RESULT_DIR/report.html (report/report.hpp) for a solve of the stack
 // in `input`; without `light_statistics` the stack's frame pixels are not read
-// (a stack solved in bands). Throws Error naming report.html when it cannot be
-// written (the other results stay on disk; the command must still fail).
+// (a stack solved in bands). `in_bands`: the solve kept to --memory-limit, so
+// the report reads the maps a band at a time too (none kept for its passes)
+// and makes its sections one at a time.
+// Throws Error naming report.html when it cannot be written (the other
+// results stay on disk; the command must still fail).
 void write_result_report(const std::filesystem::path& result_dir, const std::filesystem::path& input,
-                         bool light_statistics = true);
+                         bool light_statistics = true, bool in_bands = false);
 
 }  // namespace lightstage::pipeline
