@@ -1,7 +1,7 @@
 // Speed of every `solve --method` on one stack, in one run: pixels per second
 // at 2 threads, with l2 and a plain read of the observation matrix (the floor
 // any solver pays) as the yardsticks, and the radiometry that builds that
-// matrix from the frames. The stack: a simulated Cook–Torrance
+// matrix from the frames, and the confidence every result gets. The stack: a simulated Cook–Torrance
 // sphere under the 96-LED default dome (distant lights), 192x192.
 //   build/bench/bench_photometric --benchmark_counters_tabular=true
 #include "lightstage/common/rig.hpp"
@@ -12,6 +12,7 @@
 #include "lightstage/host/solvers/lambertian.hpp"
 #include "lightstage/host/solvers/low_rank.hpp"
 #include "lightstage/host/solvers/monotonic.hpp"
+#include "lightstage/host/solvers/normal_confidence.hpp"
 #include "lightstage/host/solvers/robust.hpp"
 #include "lightstage/host/solvers/sparse_regression.hpp"
 #include "lightstage/sim/simulate.hpp"
@@ -107,6 +108,18 @@ void BM_L2(benchmark::State& state) {
   report(state);
 }
 BENCHMARK(BM_L2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The confidence every method's result gets (solve_with), here of l2's.
+void BM_Confidence(benchmark::State& state) {
+  L2Options l2;
+  l2.threads = kThreads;
+  const SolveResult result = solve_lambertian(stack(), l2);
+  ConfidenceOptions options;
+  options.threads = kThreads;
+  for (auto _ : state) benchmark::DoNotOptimize(predict_normal_error(stack(), result, options));
+  report(state);
+}
+BENCHMARK(BM_Confidence)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_Robust(benchmark::State& state) {
   RobustOptions options;

@@ -1,18 +1,21 @@
 // Every method's confidence.pfm (normal_confidence.hpp) against its own
 // angular error: Spearman's ρ, on a simulated object of several materials
-// with the sweep's noise and on the DiLiGenT ball (skipped without
-// ../shared/data). The issue asks for ρ ≤ −0.3 for every method on both;
-// what holds today is pinned here (l2 and the Lambertian robust methods on
-// noise-driven errors, l2 on the ball), every figure is printed, and
-// docs/solvers.md has the table (the ball's systematic errors are not
-// predicted for the non-Lambertian and robust methods).
+// with the sweep's noise, on the simulator's cast-shadow bunny and on the
+// DiLiGenT ball (skipped without ../shared/data). The issue asks for
+// ρ ≤ −0.3 for every method on the ball and the multi-material object: met
+// on the multi-material object for every method and on the ball for l2 and
+// monotonic; the other methods' ball errors sit at the data's own floor and
+// are not ordered by any evidence in the pixel (docs/solvers.md). Every
+// figure is printed.
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/rig.hpp"
 #include "lightstage/host/eval/angular_error.hpp"
 #include "lightstage/host/eval/rank_correlation.hpp"
 #include "lightstage/pipeline/solve_folder.hpp"
 #include "lightstage/pipeline/solve_methods.hpp"
 #include "lightstage/pipeline/synthetic_observations.hpp"
 #include "lightstage/sim/material.hpp"
+#include "lightstage/sim/simulate.hpp"
 #include "lightstage/testing/paths.hpp"
 #include "lightstage/testing/sanitizers.hpp"
 
@@ -111,11 +114,11 @@ TEST(Confidence, OrdersTheErrorOfEveryMethodOnSeveralNoisyMaterials) {
     std::printf("multi-material %-12s rho %+.3f\n", method.c_str(), rho);
     RecordProperty(method, fmt::format("{:.3f}", rho));
     // Less confident where the error is larger, for every method.
-    EXPECT_LT(rho, -0.1) << method;
+    EXPECT_LE(rho, -0.3) << method;
     if (method == "l2" || method == "robust" || method == "l1") {
-      EXPECT_LE(rho, -0.4) << method;
+      EXPECT_LE(rho, -0.45) << method;
     }
-    EXPECT_EQ(result.parameters["confidence"]["model"], "lambertian curvature") << method;
+    EXPECT_EQ(result.parameters["confidence"]["model"], "lambertian sandwich and disagreement") << method;
     if (method != "auto") continue;
     // auto says which answer each pixel took, and counts them.
     ASSERT_EQ(result.choice.size(), result.normals.size());
@@ -129,7 +132,30 @@ TEST(Confidence, OrdersTheErrorOfEveryMethodOnSeveralNoisyMaterials) {
   }
 }
 
-TEST(Confidence, OrdersTheLeastSquaresErrorOnTheDiligentBall) {
+// Cast shadows over a floor: errors from lights the object hides.
+TEST(Confidence, OrdersTheErrorOfEveryMethodUnderCastShadows) {
+  LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("Confidence.OrdersTheErrorOfEveryMethodOnSeveralNoisyMaterials");
+  sim::SimulateOptions options;
+  options.scene = "bunny-shadows";
+  options.light_model = sim::LightModel::kDistant;
+  options.width = options.height = 64;
+  options.threads = 2;
+  const ImageStack stack = sim::simulate_stack(load_rig(default_rig_path()), options);
+  const Observations observations = make_observations(stack);
+  for (const auto& method : per_pixel_methods()) {
+    SolveSettings settings;
+    settings.method = method;
+    settings.threads = 2;
+    settings.resolve();
+    const SolveResult result = solve_with(observations, settings);
+    const double rho = rho_against_error(result, stack.ground_truth->normals, stack.mask);
+    std::printf("bunny-shadows %-12s rho %+.3f\n", method.c_str(), rho);
+    RecordProperty(method, fmt::format("{:.3f}", rho));
+    EXPECT_LE(rho, -0.15) << method;
+  }
+}
+
+TEST(Confidence, OrdersTheErrorOfL2AndMonotonicOnTheDiligentBall) {
   LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("Confidence.OrdersTheErrorOfEveryMethodOnSeveralNoisyMaterials");
   const auto shared = testing::shared_data_dir();
   if (shared.empty() || !fs::exists(shared / "diligent/ballPNG")) GTEST_SKIP() << "shared data not found";
@@ -144,8 +170,8 @@ TEST(Confidence, OrdersTheLeastSquaresErrorOnTheDiligentBall) {
     const double rho = rho_against_error(result, input.ground_truth->normals, input.observations.mask);
     std::printf("ball %-12s rho %+.3f\n", method.c_str(), rho);
     RecordProperty(method, fmt::format("{:.3f}", rho));
-    if (method == "l2") {
-      EXPECT_LE(rho, -0.45);
+    if (method == "l2" || method == "monotonic") {
+      EXPECT_LE(rho, -0.45) << method;
     }
     EXPECT_EQ(result.parameters["confidence"]["scale_deg"], 1.0) << method;
   }

@@ -7,47 +7,116 @@
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <limits>
+#include <utility>
+#include <vector>
 
 namespace lightstage {
 namespace {
 
-// Lit lights whose Gram matrix is this close to singular (smallest over
-// largest eigenvalue) leave the normal undetermined.
+// Inliers whose Gram matrix is this close to singular (smallest over largest
+// eigenvalue) leave the normal undetermined.
 constexpr double kMinEigenvalueRatio = 1e-6;
 
 // A pixel's working arrays, kept from pixel to pixel.
 struct Scratch {
-  Eigen::VectorXd shading;
-  Eigen::MatrixX3d counted;  // the counted lights' rows, zero elsewhere
+  Eigen::VectorXd shading;                          // images: lᵀn
+  Eigen::VectorXd residual;                         // images: the Lambertian residual
+  std::vector<std::uint8_t> lit;                    // images: lit and facing the answer
+  Eigen::MatrixX3d inlier_lights, weighted_lights;  // the inliers' l and |r| l, in their first rows
+  Eigen::VectorXd inlier_values, inlier_weights;    // the inliers' v and |r|
+  std::vector<double> magnitude;  // the lit lights' |residual| first, reordered to find the median
 };
 
-double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, double albedo,
-                     double method_residual, const ConfidenceOptions& options, Scratch& scratch) {
-  scratch.shading.noalias() = data.lights * n;
-  scratch.counted.resize(data.count(), 3);
-  double lit_sum = 0, lambert_squared = 0;
-  int lit = 0;
-  for (Eigen::Index j = 0; j < data.count(); ++j) {
-    const double value = data.values(j), shading = scratch.shading(j);
-    // Lit, and not from behind the answer (the model has no slope there).
-    const bool counted =
-        data.usable[static_cast<std::size_t>(j)] && value > options.shadow_threshold && shading > 0;
-    if (!counted) {
-      scratch.counted.row(j).setZero();
-      continue;
+// The k-th smallest of values[0, n), reordering them: quickselect whose
+// partition (Lomuto's) moves every value whatever the comparison says, so it
+// has no branch to mispredict; std::nth_element spent most of the
+// confidence's time mispredicting on a pixel's few dozen residuals.
+double select_kth(double* values, std::ptrdiff_t n, std::ptrdiff_t k) {
+  std::ptrdiff_t low = 0, high = n - 1;
+  while (high > low) {
+    // The median of three, as the pivot, at `high`.
+    const std::ptrdiff_t middle = low + (high - low) / 2;
+    if (values[middle] < values[low]) std::swap(values[middle], values[low]);
+    if (values[high] < values[low]) std::swap(values[high], values[low]);
+    if (values[middle] < values[high]) std::swap(values[middle], values[high]);
+    const double pivot = values[high];
+    // values[low, store) < pivot <= values[store, i).
+    std::ptrdiff_t store = low;
+    for (std::ptrdiff_t i = low; i < high; ++i) {
+      const double value = values[i];
+      values[i] = values[store];
+      values[store] = value;
+      store += value < pivot ? 1 : 0;
     }
-    scratch.counted.row(j) = data.lights.row(j);
-    lit_sum += value;
-    const double r = value - albedo * shading;
-    lambert_squared += r * r;
-    ++lit;
+    std::swap(values[store], values[high]);
+    if (k == store) return pivot;
+    if (k < store) {
+      high = store - 1;
+    } else {
+      low = store + 1;
+    }
   }
+  return values[low];
+}
+
+double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return deg_from_rad(std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)));
+}
+
+double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, double albedo,
+                     const ConfidenceOptions& options, Scratch& scratch) {
   const double infinite = std::numeric_limits<double>::infinity();
-  if (lit < 3 || !(albedo > 0)) return infinite;
-  // The counted lights' Gram matrix, as one product (a light not counted adds zeros, whatever its row).
-  const Eigen::Matrix3d gram = scratch.counted.transpose().lazyProduct(scratch.counted);
+  if (!(albedo > 0)) return infinite;
+  const Eigen::Index images = data.count();
+  scratch.shading.noalias() = data.lights * n;
+  scratch.residual.noalias() = data.values - albedo * scratch.shading;
+  if (scratch.inlier_lights.rows() < images) {
+    scratch.lit.resize(static_cast<std::size_t>(images));
+    scratch.magnitude.resize(static_cast<std::size_t>(images));
+    scratch.inlier_lights.resize(images, 3);
+    scratch.weighted_lights.resize(images, 3);
+    scratch.inlier_values.resize(images);
+    scratch.inlier_weights.resize(images);
+  }
+  // Written whatever the test says, kept by advancing: no branch to mispredict.
+  std::size_t lit = 0;
+  double lit_sum = 0;
+  for (Eigen::Index j = 0; j < images; ++j) {
+    const double value = data.values(j);
+    // Lit, and not from behind the answer (the model has no slope there).
+    const bool counted = data.usable[static_cast<std::size_t>(j)] && value > options.shadow_threshold &&
+                         scratch.shading(j) > 0;
+    scratch.lit[static_cast<std::size_t>(j)] = counted;
+    scratch.magnitude[lit] = std::abs(scratch.residual(j));
+    lit += counted ? 1 : 0;
+    lit_sum += counted ? value : 0.0;
+  }
+  if (lit < 3) return infinite;
+  const auto half = static_cast<std::ptrdiff_t>(lit / 2);
+  const double cut =
+      options.trim * select_kth(scratch.magnitude.data(), static_cast<std::ptrdiff_t>(lit), half);
+  const double floor = options.min_relative_sigma * lit_sum / static_cast<double>(lit);
+  // The inliers' lights, their values and their residuals' magnitudes (floored), packed.
+  Eigen::Index inliers = 0;
+  for (Eigen::Index j = 0; j < images; ++j) {
+    const double magnitude = std::abs(scratch.residual(j));
+    scratch.inlier_lights.row(inliers) = data.lights.row(j);
+    scratch.inlier_values(inliers) = data.values(j);
+    scratch.inlier_weights(inliers) = std::max(magnitude, floor);
+    inliers += scratch.lit[static_cast<std::size_t>(j)] && magnitude <= cut ? 1 : 0;
+  }
+  if (inliers < 3) return infinite;
+  const auto lights = scratch.inlier_lights.topRows(inliers);
+  scratch.weighted_lights.topRows(inliers) = scratch.inlier_weights.head(inliers).asDiagonal() * lights;
+  const auto weighted = scratch.weighted_lights.topRows(inliers);
+  const Eigen::Matrix3d gram = lights.transpose().lazyProduct(lights);                      // Σ l lᵀ
+  const Eigen::Matrix3d meat = weighted.transpose().lazyProduct(weighted);                  // Σ r² l lᵀ
+  const Eigen::Vector3d moment = lights.transpose() * scratch.inlier_values.head(inliers);  // Σ v l
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
   eigen.computeDirect(gram);
   const Eigen::Vector3d lambda = eigen.eigenvalues();
@@ -55,11 +124,12 @@ double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, do
   const Eigen::Matrix3d& v = eigen.eigenvectors();
   const Eigen::Matrix3d inverse = v * lambda.cwiseInverse().asDiagonal() * v.transpose();
   const Eigen::Matrix3d tangent = Eigen::Matrix3d::Identity() - n * n.transpose();
-  const double spread = std::sqrt(std::max(0.0, (tangent * inverse * tangent).trace()));
-  double sigma = options.method_residual && std::isfinite(method_residual) ? method_residual
-                                                                           : std::sqrt(lambert_squared / lit);
-  sigma = std::max(sigma, options.min_relative_sigma * lit_sum / lit);
-  return deg_from_rad(sigma / albedo * spread);
+  const Eigen::Matrix3d bread = tangent * inverse;
+  const double spread =
+      deg_from_rad(std::sqrt(std::max(0.0, (bread * meat * bread.transpose()).trace())) / albedo);
+  const Eigen::Vector3d fitted = inverse * moment;
+  const double disagreement = fitted.squaredNorm() > 0 ? angle_deg(fitted, n) : 180.0;
+  return std::hypot(spread, disagreement);
 }
 
 }  // namespace
@@ -69,16 +139,19 @@ void ConfidenceOptions::check() const {
     fail("ConfidenceOptions.shadow_threshold: must be finite and >= 0, got {}", shadow_threshold);
   if (!(std::isfinite(scale_deg) && scale_deg > 0))
     fail("ConfidenceOptions.scale_deg: must be finite and > 0, got {}", scale_deg);
+  if (!(std::isfinite(trim) && trim >= 1))
+    fail("ConfidenceOptions.trim: must be finite and >= 1 (the median residual's lights are inliers), got {}",
+         trim);
   if (!(std::isfinite(min_relative_sigma) && min_relative_sigma >= 0))
     fail("ConfidenceOptions.min_relative_sigma: must be finite and >= 0, got {}", min_relative_sigma);
   if (threads < 0) fail("ConfidenceOptions.threads: must be 0 (automatic) or positive, got {}", threads);
 }
 
 nlohmann::json ConfidenceOptions::to_json() const {
-  return {{"model", "lambertian curvature"},
+  return {{"model", "lambertian sandwich and disagreement"},
           {"shadow_threshold", shadow_threshold},
           {"scale_deg", scale_deg},
-          {"sigma", method_residual ? "method residual" : "lambertian residual"},
+          {"trim", trim},
           {"min_relative_sigma", min_relative_sigma},
           {"confidence", "1 / (1 + predicted_error_deg / scale_deg)"}};
 }
@@ -91,24 +164,21 @@ cv::Mat predict_normal_error(const Observations& observations, const SolveResult
     fail("predict_normal_error: result maps are {}x{}, observations {}x{}", result.normals.cols,
          result.normals.rows, observations.size.width, observations.size.height);
   cv::Mat error(observations.size, CV_32FC1, cv::Scalar::all(0));
-  const bool has_residual = !result.residual.empty() && result.residual.size() == observations.size;
-  parallel_chunks(
-      observations.pixel_count(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-        PixelObservations data;
-        Scratch scratch;
-        for (std::size_t p = begin; p < end; ++p) {
-          const cv::Point& at = observations.pixels[p];
-          if (result.solved.at<std::uint8_t>(at) == 0) continue;
-          const cv::Vec3f& normal = result.normals.at<cv::Vec3f>(at);
-          const Eigen::Vector3d n(normal[0], normal[1], normal[2]);
-          if (!(n.norm() > 0.5)) continue;
-          load_pixel(observations, p, true, data);
-          const double residual =
-              has_residual ? result.residual.at<float>(at) : std::numeric_limits<double>::quiet_NaN();
-          error.at<float>(at) = static_cast<float>(
-              predict_pixel(data, n.normalized(), result.albedo.at<float>(at), residual, options, scratch));
-        }
-      });
+  parallel_chunks(observations.pixel_count(), options.threads,
+                  [&](std::size_t, std::size_t begin, std::size_t end) {
+                    PixelObservations data;
+                    Scratch scratch;
+                    for (std::size_t p = begin; p < end; ++p) {
+                      const cv::Point& at = observations.pixels[p];
+                      if (result.solved.at<std::uint8_t>(at) == 0) continue;
+                      const cv::Vec3f& normal = result.normals.at<cv::Vec3f>(at);
+                      const Eigen::Vector3d n(normal[0], normal[1], normal[2]);
+                      if (!(n.norm() > 0.5)) continue;
+                      load_pixel(observations, p, true, data);
+                      error.at<float>(at) = static_cast<float>(
+                          predict_pixel(data, n.normalized(), result.albedo.at<float>(at), options, scratch));
+                    }
+                  });
   return error;
 }
 

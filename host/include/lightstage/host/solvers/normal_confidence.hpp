@@ -1,16 +1,19 @@
 #pragma once
-// A confidence for every method's normals that predicts its error: the
-// spread the photometric data leave the normal, from the local curvature of
-// a Lambertian cost around the method's answer. With b = ρ n fitted to the
-// lit observations v_j ≈ lᵀ_j b, the covariance of b is σ² M⁻¹ with
-// M = Σ l_j lᵀ_j over the lit lights, so the normal's angular spread is
-//   e = σ / ρ · √tr(P M⁻¹ P),   P = I − n nᵀ   (radians),
-// large where few lights are lit, where they bunch on one side (grazing,
-// near the occluding contour), where the albedo is dark, and where the data
-// depart from the model (σ: the method's own RMS residual, or the Lambertian
-// one where the method has none in value units). Confidence = 1 / (1 + e / s),
-// s = ConfidenceOptions::scale_deg, so e = s (1/c − 1) reads it back.
-
+// A confidence for every method's normals that predicts its error, from the
+// pixel's own observations around the method's answer (n, ρ). The lit lights
+// facing n whose Lambertian residual r_j = v_j − ρ lᵀ_j n is within
+// `trim` × the median |r| are the inliers (shadows and highlights drop out,
+// as any robust method drops them). Two parts, in degrees:
+// - spread: the normal's standard error from the sandwich covariance of a
+//   Lambertian fit to the inliers, C = M⁻¹ (Σ r_j² l_j lᵀ_j) M⁻¹ with
+//   M = Σ l_j lᵀ_j: e_s = √tr(P C P) / ρ, P = I − n nᵀ. Unlike σ² M⁻¹ it
+//   weighs each light's own residual where it has leverage, so residuals
+//   the model leaves at grazing or one-sided light count more;
+// - disagreement: the angle between n and the inliers' least-squares
+//   normal M⁻¹ Σ v_j l_j, where the method's answer is pulled away from
+//   what its clean observations say (outliers it kept, a model that bends).
+// e = √(e_s² + e_d²); confidence = 1 / (1 + e / s), s =
+// ConfidenceOptions::scale_deg, so e = s (1/c − 1) reads it back.
 #include "lightstage/host/radiometry.hpp"
 #include "lightstage/host/solvers/solve_result.hpp"
 
@@ -22,8 +25,8 @@ namespace lightstage {
 struct ConfidenceOptions {
   double shadow_threshold = 0;       // observations at or below it are not lit (the solve's threshold)
   double scale_deg = 1.0;            // s: the predicted error at which confidence is 0.5
-  bool method_residual = true;       // σ from SolveResult::residual (else the Lambertian residual)
-  double min_relative_sigma = 1e-3;  // σ floor, relative to the pixel's mean lit value (quantisation)
+  double trim = 2.0;                 // inliers: |r| at most this many times the median |r|
+  double min_relative_sigma = 1e-3;  // |r| floor, relative to the pixel's mean lit value (quantisation)
   int threads = 0;                   // 0 = hardware concurrency
 
   void check() const;  // throws InputError naming the field and value
@@ -31,7 +34,7 @@ struct ConfidenceOptions {
 };
 
 // Predicted angular error in degrees (CV_32FC1, the result's size) for every
-// solved pixel of `result`; +inf where fewer than three lit lights remain or
+// solved pixel of `result`; +inf where fewer than three inliers remain or
 // they are coplanar; 0 where not solved.
 cv::Mat predict_normal_error(const Observations& observations, const SolveResult& result,
                              const ConfidenceOptions& options);

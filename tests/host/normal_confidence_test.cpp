@@ -1,0 +1,157 @@
+// The confidence's predicted error (solvers/normal_confidence.hpp) on
+// synthetic Lambertian pixels: calibrated to the error noise gives, growing
+// with it, large where the answer kept an outlier, and infinite where the
+// data leave the normal open.
+#include "lightstage/host/solvers/normal_confidence.hpp"
+
+#include "lightstage/common/error.hpp"
+#include "lightstage/common/geometry.hpp"
+#include "lightstage/host/solvers/lambertian.hpp"
+#include "synthetic.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace lightstage {
+namespace {
+
+using testing::make_scene;
+using testing::SyntheticScene;
+
+// Gaussian noise of `sigma` on every lit observation.
+void add_noise(Observations& observations, double sigma, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0, sigma);
+  for (Eigen::Index p = 0; p < observations.intensities.rows(); ++p)
+    for (Eigen::Index j = 0; j < observations.intensities.cols(); ++j)
+      if (observations.intensities(p, j) > 0)
+        observations.intensities(p, j) += static_cast<float>(noise(rng));
+}
+
+SolveResult solve_l2(const Observations& observations) {
+  L2Options options;
+  options.shadow_threshold = 0;
+  options.threads = 2;
+  return solve_lambertian(observations, options);
+}
+
+struct Errors {
+  double rms_actual = 0;  // of the solved normals against the truth, degrees
+  double median_predicted = 0;
+};
+
+Errors errors(const SyntheticScene& scene, const SolveResult& result, const cv::Mat& predicted) {
+  Errors out;
+  std::vector<double> predictions;
+  double squares = 0;
+  for (std::size_t p = 0; p < scene.normals.size(); ++p) {
+    const cv::Point at = scene.observations.pixels[p];
+    if (result.solved.at<std::uint8_t>(at) == 0) continue;
+    const cv::Vec3f n = result.normals.at<cv::Vec3f>(at);
+    squares += std::pow(angle_between_deg(Vec3(n[0], n[1], n[2]), scene.normals[p]), 2);
+    predictions.push_back(predicted.at<float>(at));
+  }
+  out.rms_actual = std::sqrt(squares / static_cast<double>(predictions.size()));
+  std::nth_element(predictions.begin(),
+                   predictions.begin() + static_cast<std::ptrdiff_t>(predictions.size() / 2),
+                   predictions.end());
+  out.median_predicted = predictions[predictions.size() / 2];
+  return out;
+}
+
+TEST(NormalConfidence, PredictsTheErrorNoiseGivesAndGrowsWithIt) {
+  ConfidenceOptions options;
+  options.threads = 2;
+  std::vector<Errors> measured;
+  for (const double sigma : {0.005, 0.02}) {
+    SyntheticScene scene = make_scene(24, 24, 40, 5, /*clamp_shadows=*/true);
+    add_noise(scene.observations, sigma, 9);
+    const SolveResult result = solve_l2(scene.observations);
+    measured.push_back(errors(scene, result, predict_normal_error(scene.observations, result, options)));
+    std::printf("sigma %.3f: actual rms %.3f deg, predicted median %.3f deg\n", sigma,
+                measured.back().rms_actual, measured.back().median_predicted);
+    // The right size: within a factor 2 of the error the noise gives.
+    EXPECT_GT(measured.back().median_predicted, 0.5 * measured.back().rms_actual);
+    EXPECT_LT(measured.back().median_predicted, 2.0 * measured.back().rms_actual);
+  }
+  // Four times the noise, about four times the predicted error.
+  const double ratio = measured[1].median_predicted / measured[0].median_predicted;
+  EXPECT_GT(ratio, 3.0);
+  EXPECT_LT(ratio, 5.0);
+}
+
+TEST(NormalConfidence, ExactDataIsConfidentUpToTheQuantisationFloor) {
+  const SyntheticScene scene = make_scene(8, 8, 20, 3, /*clamp_shadows=*/true);
+  const SolveResult result = solve_l2(scene.observations);
+  ConfidenceOptions options;
+  const cv::Mat predicted = predict_normal_error(scene.observations, result, options);
+  double worst = 0;
+  for (const cv::Point& at : scene.observations.pixels)
+    if (result.solved.at<std::uint8_t>(at) != 0)
+      worst = std::max(worst, static_cast<double>(predicted.at<float>(at)));
+  EXPECT_GT(worst, 0.0);  // the floor: 1e-3 of the mean lit value
+  EXPECT_LT(worst, 1.0);
+  options.min_relative_sigma = 0;
+  const cv::Mat unfloored = predict_normal_error(scene.observations, result, options);
+  for (const cv::Point& at : scene.observations.pixels) {
+    if (result.solved.at<std::uint8_t>(at) != 0) {
+      EXPECT_LT(unfloored.at<float>(at), 1e-3);
+    }
+  }
+}
+
+TEST(NormalConfidence, AnOutlierTheAnswerKeptLowersTheConfidence) {
+  SyntheticScene scene = make_scene(1, 1, 30, 7, /*clamp_shadows=*/true);
+  add_noise(scene.observations, 0.002, 1);
+  ConfidenceOptions options;
+  const SolveResult clean = solve_l2(scene.observations);
+  const double clean_error = predict_normal_error(scene.observations, clean, options).at<float>(0, 0);
+  // A highlight on the brightest lit light: least squares keeps it and tilts.
+  Eigen::Index brightest = 0;
+  scene.observations.intensities.row(0).maxCoeff(&brightest);
+  scene.observations.intensities(0, brightest) *= 4;
+  const SolveResult tilted = solve_l2(scene.observations);
+  const cv::Vec3f n = tilted.normals.at<cv::Vec3f>(0, 0);
+  const double actual = angle_between_deg(Vec3(n[0], n[1], n[2]), scene.normals[0]);
+  const double predicted = predict_normal_error(scene.observations, tilted, options).at<float>(0, 0);
+  std::printf("outlier: actual %.2f deg, predicted %.2f deg (clean %.3f deg)\n", actual, predicted,
+              clean_error);
+  EXPECT_GT(actual, 1.0);
+  EXPECT_GT(predicted, 0.5 * actual);
+  EXPECT_GT(predicted, 10 * clean_error);
+}
+
+TEST(NormalConfidence, LeavesANormalTheDataDoNotFixInfinite) {
+  SyntheticScene scene = make_scene(2, 1, 12, 2, /*clamp_shadows=*/true);
+  const SolveResult result = solve_l2(scene.observations);
+  // Two lit lights remain at the first pixel: its normal is open.
+  for (Eigen::Index j = 2; j < scene.observations.intensities.cols(); ++j)
+    scene.observations.intensities(0, j) = 0;
+  const cv::Mat predicted = predict_normal_error(scene.observations, result, ConfidenceOptions{});
+  EXPECT_TRUE(std::isinf(predicted.at<float>(0, 0)));
+  EXPECT_TRUE(std::isfinite(predicted.at<float>(0, 1)));
+  const cv::Mat confidence = confidence_from_error(predicted, result.solved, 1.0);
+  EXPECT_EQ(confidence.at<float>(0, 0), 0.0f);
+  EXPECT_GT(confidence.at<float>(0, 1), 0.0f);
+}
+
+TEST(NormalConfidence, RefusesOptionsOutOfRangeNamingTheField) {
+  ConfidenceOptions options;
+  options.trim = 0.5;
+  try {
+    options.check();
+    FAIL() << "trim 0.5 accepted";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("ConfidenceOptions.trim"), std::string::npos);
+  }
+  options = ConfidenceOptions{};
+  options.scale_deg = 0;
+  EXPECT_THROW(options.check(), InputError);
+}
+
+}  // namespace
+}  // namespace lightstage
