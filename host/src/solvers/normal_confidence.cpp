@@ -64,23 +64,12 @@ double select_kth(double* values, std::ptrdiff_t n, std::ptrdiff_t k) {
   return values[low];
 }
 
-// Gaussian residuals cut at `trim` × their median magnitude keep only part
-// of their variance; the sandwich's sum of squares is divided by that share so
-// the spread predicts the error noise gives. With the cut c in units of σ
-// (the median |r| is 0.6745 σ), the share is 1 − 2cφ(c) / (2Φ(c) − 1).
-double kept_variance_share(double trim) {
-  const double c = trim * 0.6744897501960817;
-  const double inside = std::erf(c / std::sqrt(2.0));  // 2Φ(c) − 1
-  const double density = std::exp(-0.5 * c * c) / std::sqrt(2 * kPi);
-  return 1 - 2 * c * density / inside;
-}
-
 double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return deg_from_rad(std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)));
 }
 
 double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, double albedo,
-                     const ConfidenceOptions& options, double variance_share, Scratch& scratch) {
+                     const ConfidenceOptions& options, Scratch& scratch) {
   const double infinite = std::numeric_limits<double>::infinity();
   if (!(albedo > 0)) return infinite;
   const Eigen::Index images = data.count();
@@ -136,8 +125,8 @@ double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, do
   const Eigen::Matrix3d inverse = v * lambda.cwiseInverse().asDiagonal() * v.transpose();
   const Eigen::Matrix3d tangent = Eigen::Matrix3d::Identity() - n * n.transpose();
   const Eigen::Matrix3d bread = tangent * inverse;
-  const double spread = deg_from_rad(
-      std::sqrt(std::max(0.0, (bread * meat * bread.transpose()).trace() / variance_share)) / albedo);
+  const double spread =
+      deg_from_rad(std::sqrt(std::max(0.0, (bread * meat * bread.transpose()).trace())) / albedo);
   const Eigen::Vector3d fitted = inverse * moment;
   const double disagreement = fitted.squaredNorm() > 0 ? angle_deg(fitted, n) : 180.0;
   return std::hypot(spread, disagreement);
@@ -175,22 +164,21 @@ cv::Mat predict_normal_error(const Observations& observations, const SolveResult
     fail("predict_normal_error: result maps are {}x{}, observations {}x{}", result.normals.cols,
          result.normals.rows, observations.size.width, observations.size.height);
   cv::Mat error(observations.size, CV_32FC1, cv::Scalar::all(0));
-  const double share = kept_variance_share(options.trim);
-  parallel_chunks(
-      observations.pixel_count(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-        PixelObservations data;
-        Scratch scratch;
-        for (std::size_t p = begin; p < end; ++p) {
-          const cv::Point& at = observations.pixels[p];
-          if (result.solved.at<std::uint8_t>(at) == 0) continue;
-          const cv::Vec3f& normal = result.normals.at<cv::Vec3f>(at);
-          const Eigen::Vector3d n(normal[0], normal[1], normal[2]);
-          if (!(n.norm() > 0.5)) continue;
-          load_pixel(observations, p, true, data);
-          error.at<float>(at) = static_cast<float>(
-              predict_pixel(data, n.normalized(), result.albedo.at<float>(at), options, share, scratch));
-        }
-      });
+  parallel_chunks(observations.pixel_count(), options.threads,
+                  [&](std::size_t, std::size_t begin, std::size_t end) {
+                    PixelObservations data;
+                    Scratch scratch;
+                    for (std::size_t p = begin; p < end; ++p) {
+                      const cv::Point& at = observations.pixels[p];
+                      if (result.solved.at<std::uint8_t>(at) == 0) continue;
+                      const cv::Vec3f& normal = result.normals.at<cv::Vec3f>(at);
+                      const Eigen::Vector3d n(normal[0], normal[1], normal[2]);
+                      if (!(n.norm() > 0.5)) continue;
+                      load_pixel(observations, p, true, data);
+                      error.at<float>(at) = static_cast<float>(
+                          predict_pixel(data, n.normalized(), result.albedo.at<float>(at), options, scratch));
+                    }
+                  });
   return error;
 }
 

@@ -6,16 +6,14 @@
 // as any robust method drops them). Two parts, in degrees:
 // - spread: the normal's standard error from the sandwich covariance of a
 //   Lambertian fit to the inliers, C = M⁻¹ (Σ r_j² l_j lᵀ_j) M⁻¹ with
-//   M = Σ l_j lᵀ_j: e_s = √(tr(P C P) / k) / ρ, P = I − n nᵀ, k the share
-//   of Gaussian residuals' variance the cut keeps (0.47 at trim 2). Unlike
-//   σ² M⁻¹ it weighs each light's own residual where it has leverage, so
-//   residuals the model leaves at grazing or one-sided light count more;
+//   M = Σ l_j lᵀ_j: e_s = √tr(P C P) / ρ, P = I − n nᵀ. Unlike σ² M⁻¹ it
+//   weighs each light's own residual where it has leverage, so residuals
+//   the model leaves at grazing or one-sided light count more;
 // - disagreement: the angle between n and the inliers' least-squares
 //   normal M⁻¹ Σ v_j l_j, where the method's answer is pulled away from
 //   what its clean observations say (outliers it kept, a model that bends).
 // e = √(e_s² + e_d²); confidence = 1 / (1 + e / s), s =
 // ConfidenceOptions::scale_deg, so e = s (1/c − 1) reads it back.
-
 #include "lightstage/host/radiometry.hpp"
 #include "lightstage/host/solvers/solve_result.hpp"
 
