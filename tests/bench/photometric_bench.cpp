@@ -1,8 +1,9 @@
 // Speed of every `solve --method` on one stack, in one run: pixels per second
 // at 2 threads, with l2 and a plain read of the observation matrix (the floor
-// any solver pays) as the yardsticks, and the radiometry that builds that
-// matrix from the frames, and the confidence every result gets. The stack: a simulated Cook–Torrance
-// sphere under the 96-LED default dome (distant lights), 192x192.
+// any solver pays) as the yardsticks, the radiometry that builds that matrix
+// from the frames, and the confidence every result gets. The stack: a
+// simulated Cook–Torrance sphere under the 96-LED default dome (distant
+// lights), 192x192.
 //   build/bench/bench_photometric --benchmark_counters_tabular=true
 #include "lightstage/common/rig.hpp"
 #include "lightstage/host/radiometry.hpp"

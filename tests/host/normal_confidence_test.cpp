@@ -13,7 +13,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <numeric>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace lightstage {
@@ -39,28 +42,40 @@ SolveResult solve_l2(const Observations& observations) {
   return solve_lambertian(observations, options);
 }
 
-struct Errors {
-  double rms_actual = 0;  // of the solved normals against the truth, degrees
-  double median_predicted = 0;
+struct Errors {           // degrees, over the solved pixels
+  double rms_actual = 0;  // of the solved normals against the truth
+  double rms_predicted = 0;
 };
 
 Errors errors(const SyntheticScene& scene, const SolveResult& result, const cv::Mat& predicted) {
-  Errors out;
-  std::vector<double> predictions;
-  double squares = 0;
+  double actual = 0, expected = 0;
+  int count = 0;
   for (std::size_t p = 0; p < scene.normals.size(); ++p) {
     const cv::Point at = scene.observations.pixels[p];
     if (result.solved.at<std::uint8_t>(at) == 0) continue;
     const cv::Vec3f n = result.normals.at<cv::Vec3f>(at);
-    squares += std::pow(angle_between_deg(Vec3(n[0], n[1], n[2]), scene.normals[p]), 2);
-    predictions.push_back(predicted.at<float>(at));
+    actual += std::pow(angle_between_deg(Vec3(n[0], n[1], n[2]), scene.normals[p]), 2);
+    expected += std::pow(predicted.at<float>(at), 2);
+    ++count;
   }
-  out.rms_actual = std::sqrt(squares / static_cast<double>(predictions.size()));
-  std::nth_element(predictions.begin(),
-                   predictions.begin() + static_cast<std::ptrdiff_t>(predictions.size() / 2),
-                   predictions.end());
-  out.median_predicted = predictions[predictions.size() / 2];
-  return out;
+  return {std::sqrt(actual / count), std::sqrt(expected / count)};
+}
+
+// A solve result holding the true normals and albedos.
+SolveResult truth_as_answer(const SyntheticScene& scene) {
+  SolveResult result;
+  const cv::Size size = scene.observations.size;
+  result.normals = cv::Mat(size, CV_32FC3, cv::Scalar::all(0));
+  result.albedo = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
+  result.solved = cv::Mat(size, CV_8UC1, cv::Scalar::all(255));
+  for (std::size_t p = 0; p < scene.normals.size(); ++p) {
+    const cv::Point at = scene.observations.pixels[p];
+    const Vec3& n = scene.normals[p];
+    result.normals.at<cv::Vec3f>(at) =
+        cv::Vec3f(static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()));
+    result.albedo.at<float>(at) = static_cast<float>(scene.albedo[p]);
+  }
+  return result;
 }
 
 TEST(NormalConfidence, PredictsTheErrorNoiseGivesAndGrowsWithIt) {
@@ -72,14 +87,14 @@ TEST(NormalConfidence, PredictsTheErrorNoiseGivesAndGrowsWithIt) {
     add_noise(scene.observations, sigma, 9);
     const SolveResult result = solve_l2(scene.observations);
     measured.push_back(errors(scene, result, predict_normal_error(scene.observations, result, options)));
-    std::printf("sigma %.3f: actual rms %.3f deg, predicted median %.3f deg\n", sigma,
-                measured.back().rms_actual, measured.back().median_predicted);
-    // The right size: within a factor 2 of the error the noise gives.
-    EXPECT_GT(measured.back().median_predicted, 0.5 * measured.back().rms_actual);
-    EXPECT_LT(measured.back().median_predicted, 2.0 * measured.back().rms_actual);
+    std::printf("sigma %.3f: rms actual %.3f deg, rms predicted %.3f deg\n", sigma,
+                measured.back().rms_actual, measured.back().rms_predicted);
+    // The right size: the error the noise gives, within a quarter.
+    EXPECT_GT(measured.back().rms_predicted, 0.75 * measured.back().rms_actual);
+    EXPECT_LT(measured.back().rms_predicted, 1.25 * measured.back().rms_actual);
   }
   // Four times the noise, about four times the predicted error.
-  const double ratio = measured[1].median_predicted / measured[0].median_predicted;
+  const double ratio = measured[1].rms_predicted / measured[0].rms_predicted;
   EXPECT_GT(ratio, 3.0);
   EXPECT_LT(ratio, 5.0);
 }
@@ -123,6 +138,47 @@ TEST(NormalConfidence, AnOutlierTheAnswerKeptLowersTheConfidence) {
   EXPECT_GT(actual, 1.0);
   EXPECT_GT(predicted, 0.5 * actual);
   EXPECT_GT(predicted, 10 * clean_error);
+}
+
+// Shadows and highlights the answer rightly ignored are not held against it.
+TEST(NormalConfidence, OutliersTheAnswerIgnoredLeaveItConfident) {
+  SyntheticScene scene = make_scene(6, 6, 40, 4, /*clamp_shadows=*/true);
+  add_noise(scene.observations, 0.002, 3);
+  const SolveResult truth = truth_as_answer(scene);
+  const ConfidenceOptions options;
+  const cv::Mat clean = predict_normal_error(scene.observations, truth, options);
+  // Every pixel's three brightest lights as highlights, two more in a cast shadow (lit, but dark).
+  Observations& observations = scene.observations;
+  for (Eigen::Index p = 0; p < observations.intensities.rows(); ++p) {
+    std::vector<Eigen::Index> order(static_cast<std::size_t>(observations.intensities.cols()));
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) {
+      return observations.intensities(p, a) > observations.intensities(p, b);
+    });
+    for (int k = 0; k < 3; ++k) observations.intensities(p, order[static_cast<std::size_t>(k)]) *= 3;
+    for (int k = 3; k < 5; ++k) observations.intensities(p, order[static_cast<std::size_t>(k)]) *= 0.2f;
+  }
+  const cv::Mat outliers = predict_normal_error(observations, truth, options);
+  for (const cv::Point& at : observations.pixels) {
+    EXPECT_LT(outliers.at<float>(at), 2 * clean.at<float>(at) + 0.05) << at;
+  }
+}
+
+// Three lit lights fix the normal with nothing to spare: finite, not trimmed to two.
+TEST(NormalConfidence, ThreeLitLightsGiveAFiniteError) {
+  SyntheticScene scene = make_scene(16, 16, 3, 6, /*clamp_shadows=*/false);
+  add_noise(scene.observations, 0.01, 2);
+  const cv::Mat predicted =
+      predict_normal_error(scene.observations, truth_as_answer(scene), ConfidenceOptions{});
+  int finite = 0, lit_three = 0;
+  for (std::size_t p = 0; p < scene.normals.size(); ++p) {
+    const cv::Point at = scene.observations.pixels[p];
+    if ((scene.observations.intensities.row(static_cast<Eigen::Index>(p)).array() > 0).count() < 3) continue;
+    ++lit_three;
+    finite += std::isfinite(predicted.at<float>(at)) ? 1 : 0;
+  }
+  EXPECT_GT(lit_three, 0);
+  EXPECT_EQ(finite, lit_three);
 }
 
 TEST(NormalConfidence, LeavesANormalTheDataDoNotFixInfinite) {

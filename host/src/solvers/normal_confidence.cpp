@@ -33,9 +33,10 @@ struct Scratch {
 };
 
 // The k-th smallest of values[0, n), reordering them: quickselect whose
-// partition (Lomuto's) moves every value whatever the comparison says, so it
-// has no branch to mispredict; std::nth_element spent most of the
-// confidence's time mispredicting on a pixel's few dozen residuals.
+// partition (Lomuto's) moves every value whatever the comparison says, so its
+// inner loop has no branch to mispredict; std::nth_element spent most of the
+// confidence's time mispredicting on a pixel's few dozen residuals. Many equal
+// values make it quadratic (exact synthetic data: still microseconds).
 double select_kth(double* values, std::ptrdiff_t n, std::ptrdiff_t k) {
   std::ptrdiff_t low = 0, high = n - 1;
   while (high > low) {
@@ -64,14 +65,10 @@ double select_kth(double* values, std::ptrdiff_t n, std::ptrdiff_t k) {
   return values[low];
 }
 
-double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return deg_from_rad(std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)));
-}
-
 double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, double albedo,
                      const ConfidenceOptions& options, Scratch& scratch) {
   const double infinite = std::numeric_limits<double>::infinity();
-  if (!(albedo > 0)) return infinite;
+  if (!(albedo > 0 && std::isfinite(albedo))) return infinite;
   const Eigen::Index images = data.count();
   scratch.shading.noalias() = data.lights * n;
   scratch.residual.noalias() = data.values - albedo * scratch.shading;
@@ -97,10 +94,14 @@ double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, do
     lit_sum += counted ? value : 0.0;
   }
   if (lit < 3) return infinite;
-  const auto half = static_cast<std::ptrdiff_t>(lit / 2);
-  const double cut =
-      options.trim * select_kth(scratch.magnitude.data(), static_cast<std::ptrdiff_t>(lit), half);
   const double floor = options.min_relative_sigma * lit_sum / static_cast<double>(lit);
+  // Three lit lights leave no spare one to judge them by: all are inliers (the
+  // cut at twice their median would drop one whenever rounding decides).
+  const auto half = static_cast<std::ptrdiff_t>(lit / 2);
+  const double cut = lit == 3
+                         ? infinite
+                         : std::max(floor, options.trim * select_kth(scratch.magnitude.data(),
+                                                                     static_cast<std::ptrdiff_t>(lit), half));
   // The inliers' lights, their values and their residuals' magnitudes (floored), packed.
   Eigen::Index inliers = 0;
   for (Eigen::Index j = 0; j < images; ++j) {
@@ -128,7 +129,7 @@ double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, do
   const double spread =
       deg_from_rad(std::sqrt(std::max(0.0, (bread * meat * bread.transpose()).trace())) / albedo);
   const Eigen::Vector3d fitted = inverse * moment;
-  const double disagreement = fitted.squaredNorm() > 0 ? angle_deg(fitted, n) : 180.0;
+  const double disagreement = fitted.squaredNorm() > 0 ? angle_between_deg(fitted, n) : 180.0;
   return std::hypot(spread, disagreement);
 }
 

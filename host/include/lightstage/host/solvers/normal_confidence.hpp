@@ -2,13 +2,15 @@
 // A confidence for every method's normals that predicts its error, from the
 // pixel's own observations around the method's answer (n, ρ). The lit lights
 // facing n whose Lambertian residual r_j = v_j − ρ lᵀ_j n is within
-// `trim` × the median |r| are the inliers (shadows and highlights drop out,
-// as any robust method drops them). Two parts, in degrees:
+// `trim` × their median |r| are the inliers (shadows and highlights drop
+// out, as any robust method drops them; with three lit lights, all three). Two parts, in degrees:
 // - spread: the normal's standard error from the sandwich covariance of a
 //   Lambertian fit to the inliers, C = M⁻¹ (Σ r_j² l_j lᵀ_j) M⁻¹ with
-//   M = Σ l_j lᵀ_j: e_s = √tr(P C P) / ρ, P = I − n nᵀ. Unlike σ² M⁻¹ it
-//   weighs each light's own residual where it has leverage, so residuals
-//   the model leaves at grazing or one-sided light count more;
+//   M = Σ l_j lᵀ_j and r_j the answer's own residuals (floored at
+//   `min_relative_sigma` of the mean lit value): e_s = √tr(P C P) / ρ,
+//   P = I − n nᵀ. Unlike σ² M⁻¹ it weighs each light's residual where it
+//   has leverage, so residuals the answer leaves at grazing or one-sided
+//   light count more;
 // - disagreement: the angle between n and the inliers' least-squares
 //   normal M⁻¹ Σ v_j l_j, where the method's answer is pulled away from
 //   what its clean observations say (outliers it kept, a model that bends).
