@@ -3,6 +3,7 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/geometry.hpp"
 #include "lightstage/common/parallel.hpp"
+#include "lightstage/common/select_kth.hpp"
 #include "lightstage/host/solvers/pixel_observations.hpp"
 
 #include <Eigen/Dense>
@@ -12,7 +13,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
-#include <utility>
 #include <vector>
 
 namespace lightstage {
@@ -31,39 +31,6 @@ struct Scratch {
   Eigen::VectorXd inlier_values, inlier_weights;    // the inliers' v and |r|
   std::vector<double> magnitude;  // the lit lights' |residual| first, reordered to find the median
 };
-
-// The k-th smallest of values[0, n), reordering them: quickselect whose
-// partition (Lomuto's) moves every value whatever the comparison says, so its
-// inner loop has no branch to mispredict; std::nth_element spent most of the
-// confidence's time mispredicting on a pixel's few dozen residuals. Many equal
-// values make it quadratic (exact synthetic data: still microseconds).
-double select_kth(double* values, std::ptrdiff_t n, std::ptrdiff_t k) {
-  std::ptrdiff_t low = 0, high = n - 1;
-  while (high > low) {
-    // The median of three, as the pivot, at `high`.
-    const std::ptrdiff_t middle = low + (high - low) / 2;
-    if (values[middle] < values[low]) std::swap(values[middle], values[low]);
-    if (values[high] < values[low]) std::swap(values[high], values[low]);
-    if (values[middle] < values[high]) std::swap(values[middle], values[high]);
-    const double pivot = values[high];
-    // values[low, store) < pivot <= values[store, i).
-    std::ptrdiff_t store = low;
-    for (std::ptrdiff_t i = low; i < high; ++i) {
-      const double value = values[i];
-      values[i] = values[store];
-      values[store] = value;
-      store += value < pivot ? 1 : 0;
-    }
-    std::swap(values[store], values[high]);
-    if (k == store) return pivot;
-    if (k < store) {
-      high = store - 1;
-    } else {
-      low = store + 1;
-    }
-  }
-  return values[low];
-}
 
 double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, double albedo,
                      const ConfidenceOptions& options, Scratch& scratch) {
