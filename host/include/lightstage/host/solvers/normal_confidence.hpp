@@ -3,7 +3,8 @@
 // pixel's own observations around the method's answer (n, ρ). The lit lights
 // facing n whose Lambertian residual r_j = v_j − ρ lᵀ_j n is within
 // `trim` × their median |r| are the inliers (shadows and highlights drop
-// out, as any robust method drops them; with three lit lights, all three). Two parts, in degrees:
+// out, as any robust method drops them; with three lit lights, all three).
+// Two parts, in degrees:
 // - spread: the normal's standard error from the sandwich covariance of a
 //   Lambertian fit to the inliers, C = M⁻¹ (Σ r_j² l_j lᵀ_j) M⁻¹ with
 //   M = Σ l_j lᵀ_j and r_j the answer's own residuals (floored at
@@ -16,6 +17,7 @@
 //   what its clean observations say (outliers it kept, a model that bends).
 // e = √(e_s² + e_d²); confidence = 1 / (1 + e / s), s =
 // ConfidenceOptions::scale_deg, so e = s (1/c − 1) reads it back.
+
 #include "lightstage/host/radiometry.hpp"
 #include "lightstage/host/solvers/solve_result.hpp"
 
