@@ -24,9 +24,9 @@ constexpr double kMinEigenvalueRatio = 1e-6;
 
 // A pixel's working arrays, kept from pixel to pixel.
 struct Scratch {
-  Eigen::VectorXd shading;                          // images: lᵀn
-  Eigen::VectorXd residual;                         // images: the Lambertian residual
-  std::vector<std::uint8_t> lit;                    // images: lit and facing the answer
+  Eigen::VectorXd shading;        // images: lᵀn
+  Eigen::VectorXd misfit;         // images: |v − ρ lᵀn|, the Lambertian residual's size
+  std::vector<std::uint8_t> lit;  // images: lit and facing the answer
   Eigen::MatrixX3d inlier_lights, weighted_lights;  // the inliers' l and |r| l, in their first rows
   Eigen::VectorXd inlier_values, inlier_weights;    // the inliers' v and |r|
   std::vector<double> magnitude;  // the lit lights' |residual| first, reordered to find the median
@@ -38,7 +38,7 @@ double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, do
   if (!(albedo > 0 && std::isfinite(albedo))) return infinite;
   const Eigen::Index images = data.count();
   scratch.shading.noalias() = data.lights * n;
-  scratch.residual.noalias() = data.values - albedo * scratch.shading;
+  scratch.misfit = (data.values - albedo * scratch.shading).cwiseAbs();
   if (scratch.inlier_lights.rows() < images) {
     scratch.lit.resize(static_cast<std::size_t>(images));
     scratch.magnitude.resize(static_cast<std::size_t>(images));
@@ -56,7 +56,7 @@ double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, do
     const bool counted = data.usable[static_cast<std::size_t>(j)] && value > options.shadow_threshold &&
                          scratch.shading(j) > 0;
     scratch.lit[static_cast<std::size_t>(j)] = counted;
-    scratch.magnitude[lit] = std::abs(scratch.residual(j));
+    scratch.magnitude[lit] = scratch.misfit(j);
     lit += counted ? 1 : 0;
     lit_sum += counted ? value : 0.0;
   }
@@ -72,7 +72,7 @@ double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, do
   // The inliers' lights, their values and their residuals' magnitudes (floored), packed.
   Eigen::Index inliers = 0;
   for (Eigen::Index j = 0; j < images; ++j) {
-    const double magnitude = std::abs(scratch.residual(j));
+    const double magnitude = scratch.misfit(j);
     scratch.inlier_lights.row(inliers) = data.lights.row(j);
     scratch.inlier_values(inliers) = data.values(j);
     scratch.inlier_weights(inliers) = std::max(magnitude, floor);
