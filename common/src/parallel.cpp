@@ -1,5 +1,7 @@
 #include "lightstage/common/parallel.hpp"
 
+#include <opencv2/core/utility.hpp>
+
 #include <algorithm>
 #include <atomic>
 #include <exception>
@@ -10,12 +12,29 @@
 namespace lightstage {
 namespace {
 
+std::atomic<int> thread_limit{0};  // 0: the hardware's
+std::atomic<int> helper_threads{0};
+std::atomic<int> peak_helper_threads{0};
+
+void count_helper(int change) {
+  const int now = helper_threads.fetch_add(change) + change;
+  int peak = peak_helper_threads.load();
+  while (now > peak && !peak_helper_threads.compare_exchange_weak(peak, now)) {
+  }
+}
+
 // Runs worker(0) on the caller's thread and worker(1..count-1) on their own,
 // then joins them all. `worker` must not throw.
 void run_workers(std::size_t count, const std::function<void(std::size_t)>& worker) {
   std::vector<std::thread> threads;
   threads.reserve(count - 1);
-  for (std::size_t w = 1; w < count; ++w) threads.emplace_back(worker, w);
+  for (std::size_t w = 1; w < count; ++w) {
+    count_helper(+1);
+    threads.emplace_back([&worker, w] {
+      worker(w);
+      count_helper(-1);
+    });
+  }
   worker(0);
   for (auto& thread : threads) thread.join();
 }
@@ -24,8 +43,27 @@ void run_workers(std::size_t count, const std::function<void(std::size_t)>& work
 
 int resolve_threads(int requested) {
   if (requested > 0) return requested;
+  if (const int limit = thread_limit.load(); limit > 0) return limit;
   return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
 }
+
+ThreadLimit::ThreadLimit(int threads) {
+  if (threads <= 0) return;
+  previous_ = thread_limit.exchange(threads);
+  previous_opencv_ = cv::getNumThreads();
+  cv::setNumThreads(threads);
+  set_ = true;
+}
+
+ThreadLimit::~ThreadLimit() {
+  if (!set_) return;
+  thread_limit = previous_;
+  cv::setNumThreads(previous_opencv_);
+}
+
+int parallel_peak_threads() { return 1 + peak_helper_threads.load(); }
+
+void reset_parallel_peak_threads() { peak_helper_threads = helper_threads.load(); }
 
 std::size_t parallel_chunks(std::size_t count, int threads,
                             const std::function<void(std::size_t, std::size_t, std::size_t)>& body) {

@@ -125,7 +125,8 @@ void add_solve_flags(CLI::App& sub, pipeline::SolveSettings& args) {
                  "(0 = the plain minimum, as published)")
       ->capture_default_str();
   sub.add_flag("--no-clamp", args.no_clamp, "do not clamp normalised values to <= 1");
-  sub.add_option("--threads", args.threads, "solver threads (0 = all cores)");
+  sub.add_option("--threads", args.threads,
+                 "threads for every stage: decoding, solving, writing and the report (0 = all cores)");
   sub.add_option("--crop", args.crop,
                  "X,Y,W,H: read and solve only this region of the images (pixels from the top left); near "
                  "lights and calibration stay placed in the whole image");

@@ -2,11 +2,13 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <opencv2/core/utility.hpp>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <functional>
+#include <latch>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -24,6 +26,49 @@ TEST(ResolveThreads, KeepsAPositiveCountAndUsesEveryCoreForZeroOrLess) {
   const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   EXPECT_EQ(resolve_threads(0), cores);
   EXPECT_EQ(resolve_threads(-3), cores);
+}
+
+TEST(ThreadLimit, CapsWorkThatAsksForEveryCoreUntilItEndsAndNests) {
+  const int cores = resolve_threads(0);
+  const int opencv = cv::getNumThreads();
+  {
+    const ThreadLimit outer(3);
+    EXPECT_EQ(resolve_threads(0), 3);
+    EXPECT_EQ(resolve_threads(5), 5) << "an explicit count is the caller's choice";
+    {
+      const ThreadLimit inner(1);
+      EXPECT_EQ(resolve_threads(0), 1);
+      EXPECT_EQ(cv::getNumThreads(), 1);
+      const ThreadLimit none(0);
+      EXPECT_EQ(resolve_threads(0), 1) << "0 leaves the limit as it was";
+    }
+    EXPECT_EQ(resolve_threads(0), 3);
+  }
+  EXPECT_EQ(resolve_threads(0), cores);
+  EXPECT_EQ(cv::getNumThreads(), opencv);
+}
+
+// Every worker waits until `threads` have started, so they are surely side by side.
+int peak_of(int threads, int nested_threads) {
+  reset_parallel_peak_threads();
+  std::latch started(threads);
+  parallel_for(threads, threads, [&](int) {
+    started.arrive_and_wait();
+    if (nested_threads > 0) parallel_for(nested_threads, nested_threads, [](int) {});
+  });
+  return parallel_peak_threads();
+}
+
+TEST(ParallelPeakThreads, CountsTheThreadsThatRanAtOnceWithTheCallerOnce) {
+  EXPECT_EQ(peak_of(1, 0), 1);
+  EXPECT_EQ(peak_of(3, 0), 3);
+  reset_parallel_peak_threads();
+  EXPECT_EQ(parallel_peak_threads(), 1) << "a reset forgets the threads that have ended";
+  // Three workers that each start two: up to six threads, however the inner
+  // calls interleave at least four (the first inner call starts while all three run).
+  const int nested = peak_of(3, 2);
+  EXPECT_GE(nested, 4);
+  EXPECT_LE(nested, 6);
 }
 
 // (chunk, begin, end) of every call, sorted by chunk.

@@ -4,6 +4,7 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
+#include "lightstage/common/parallel.hpp"
 #include "lightstage/host/io/output_folder.hpp"
 
 #include <algorithm>
@@ -84,6 +85,7 @@ json BatchReport::to_json() const {
 BatchReport solve_batch(const fs::path& input, const SolveSettings& settings, const fs::path& out,
                         const SolveCalibration& calibration, const BatchProgress& progress) {
   io::require_separate_output(out, {input});
+  const ThreadLimit threads(settings.threads.value_or(0));  // decoding, writing and the report too
   const std::vector<BatchCapture> captures = find_batch_captures(input);
   fs::create_directories(out);
   BatchReport report;

@@ -2,6 +2,7 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
+#include "lightstage/common/parallel.hpp"
 #include "lightstage/host/calibration/apply_calibration.hpp"
 #include "lightstage/host/io/output_folder.hpp"
 #include "lightstage/host/io/solve_output.hpp"
@@ -143,6 +144,7 @@ SolveReport solve_folder(const std::filesystem::path& input, const SolveSettings
                          const std::filesystem::path& out, const SolveCalibration& calibration,
                          const ProgressStart& progress) {
   io::require_separate_output(out, {input});
+  const ThreadLimit threads(settings.threads.value_or(0));  // decoding, writing and the report too
   io::StackOutline outline = io::read_stack_outline(input);
   const cv::Rect region = solve_region(settings, outline.size, input);
   outline.size.height = region.height;  // frames are decoded full width, then cut to the region

@@ -4,6 +4,7 @@
 #include "json_file.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
+#include "lightstage/common/parallel.hpp"
 #include "lightstage/common/temporary_path.hpp"
 #include "lightstage/host/io/output_folder.hpp"
 #include "lightstage/host/io/pfm.hpp"
@@ -434,6 +435,7 @@ SolveReport solve_tile(const fs::path& input, const SolveSettings& settings, con
                        const SolveCalibration& calibration, const std::string& tile,
                        const ProgressStart& progress) {
   io::require_separate_output(out, {input});
+  const ThreadLimit threads(settings.threads.value_or(0));  // decoding, writing and the report too
   if (!solves_in_tiles(settings))
     fail(
         "--tile: --method {} needs the whole image at once; tiles solve {} (and no --azimuth-from a "

@@ -14,8 +14,32 @@
 
 namespace lightstage {
 
-// `requested` threads, or the hardware concurrency when it is 0 or less (at least 1).
+// `requested` threads; when it is 0 or less, the limit of the innermost
+// ThreadLimit in scope, else the hardware concurrency (at least 1).
 int resolve_threads(int requested);
+
+// Caps the work that asks for "all cores" (threads 0), here and in OpenCV,
+// while it lives: a command's --threads holds for every stage it runs
+// (decoding, solving, writing, the report) without each call being told.
+// 0 or less leaves the limit as it was. Limits nest; the destructor restores.
+class ThreadLimit {
+ public:
+  explicit ThreadLimit(int threads);
+  ~ThreadLimit();
+  ThreadLimit(const ThreadLimit&) = delete;
+  ThreadLimit& operator=(const ThreadLimit&) = delete;
+
+ private:
+  int previous_ = 0;
+  int previous_opencv_ = 0;
+  bool set_ = false;
+};
+
+// The most threads that ran work of the functions below at once (the caller's
+// counted once, however deeply calls nest) since the last reset: how tests see
+// that --threads is kept.
+int parallel_peak_threads();
+void reset_parallel_peak_threads();
 
 // Calls body(chunk, begin, end) for `chunks` contiguous, in-order ranges that
 // cover [0, count), each on its own thread. Returns the number of chunks used
