@@ -1,5 +1,7 @@
 #include "lightstage/common/child_process.hpp"
 
+#include "lightstage/testing/paths.hpp"
+
 #include <gtest/gtest.h>
 
 #include <signal.h>
@@ -11,11 +13,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path scratch_log(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("lightstage-child-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir / name;
-}
+// Under the build tree, not /tmp: nothing is left behind on the machine.
+fs::path scratch_log(const std::string& name) { return lightstage::testing::scratch_dir() / name; }
 
 // A parent that takes SIGTERM with sigwait blocks it; its children must still hear it.
 TEST(ChildProcess, ChildOfAParentBlockingSigtermStillEndsOnIt) {
