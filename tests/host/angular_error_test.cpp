@@ -8,6 +8,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <random>
+#include <vector>
+
 namespace lightstage {
 namespace {
 
@@ -38,6 +42,33 @@ TEST(HostAngularError, StatsOverPixelsWhereBothHaveNormals) {
   const auto json = map.stats.to_json();
   EXPECT_EQ(json["count"], 11);
   EXPECT_TRUE(json.contains("mean_deg") && json.contains("median_deg") && json.contains("p90_deg"));
+}
+
+// The quantiles interpolate between order statistics as over the sorted errors,
+// whatever order the pixels come in, with ties and for odd and even counts.
+TEST(HostAngularError, QuantilesMatchTheSortedErrorsInAnyOrder) {
+  std::mt19937 random(7);
+  for (const int count : {1, 2, 3, 10, 11, 100, 257}) {
+    cv::Mat truth(1, count, CV_32FC3, cv::Scalar(0, 0, 1));
+    cv::Mat predicted(1, count, CV_32FC3);
+    std::uniform_int_distribution<int> tilt(0, count < 10 ? 40 : 4 * count);
+    for (int i = 0; i < count; ++i) predicted.at<cv::Vec3f>(0, i) = tilted(0.25 * tilt(random));
+    const AngularErrorMap map =
+        angular_error(predicted, truth, cv::Mat(1, count, CV_8UC1, cv::Scalar::all(255)));
+    std::vector<double> sorted(map.degrees.begin<float>(), map.degrees.end<float>());
+    std::sort(sorted.begin(), sorted.end());
+    const auto quantile = [&](double q) {
+      const double position = q * (count - 1);
+      const auto below = static_cast<std::size_t>(position);
+      const double upper = sorted[std::min<std::size_t>(below + 1, sorted.size() - 1)];
+      return sorted[below] + (upper - sorted[below]) * (position - static_cast<double>(below));
+    };
+    SCOPED_TRACE(count);
+    // The map holds floats, the statistics doubles: the same angles up to float rounding.
+    EXPECT_NEAR(map.stats.median, quantile(0.5), 1e-4);
+    EXPECT_NEAR(map.stats.p90, quantile(0.9), 1e-4);
+    EXPECT_NEAR(map.stats.max, sorted.back(), 1e-4);
+  }
 }
 
 TEST(HostAngularError, EvaluatesFilesAgainstAGroundTruthFolder) {

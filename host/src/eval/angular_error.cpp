@@ -20,12 +20,18 @@ bool present(const cv::Vec3f& n) {
 }
 
 // Linear interpolation between order statistics (numpy's default).
-double percentile(const std::vector<double>& sorted, double q) {
-  const double position = q * static_cast<double>(sorted.size() - 1);
+// The q-quantile, interpolated between the two order statistics around it, as
+// from the sorted values; `values` are partitioned from `from` on (what lies
+// before it must be no larger than anything after it). Selection, not a sort:
+// a megapixel's errors are sorted in about five times the time.
+double percentile(std::vector<double>& values, std::size_t from, double q) {
+  const double position = q * static_cast<double>(values.size() - 1);
   const auto below = static_cast<std::size_t>(std::floor(position));
-  const std::size_t above = std::min(below + 1, sorted.size() - 1);
-  const double fraction = position - static_cast<double>(below);
-  return sorted[below] + (sorted[above] - sorted[below]) * fraction;
+  const auto at = values.begin() + static_cast<std::ptrdiff_t>(below);
+  std::nth_element(values.begin() + static_cast<std::ptrdiff_t>(std::min(from, below)), at, values.end());
+  const double lower = *at;
+  const double upper = below + 1 < values.size() ? *std::min_element(at + 1, values.end()) : lower;
+  return lower + (upper - lower) * (position - static_cast<double>(below));
 }
 
 }  // namespace
@@ -91,11 +97,12 @@ AngularErrorStats AngularErrorAccumulator::stats() {
   stats.count = errors_.size();
   if (!errors_.empty()) {
     std::vector<double>& errors = errors_;
-    std::sort(errors.begin(), errors.end());
     stats.mean = sum_ / static_cast<double>(errors.size());
-    stats.median = percentile(errors, 0.5);
-    stats.p90 = percentile(errors, 0.9);
-    stats.max = errors.back();
+    stats.max = *std::max_element(errors.begin(), errors.end());
+    stats.median = percentile(errors, 0, 0.5);
+    // The median's selection left everything from its place on no smaller than what lies before.
+    stats.p90 =
+        percentile(errors, static_cast<std::size_t>(0.5 * static_cast<double>(errors.size() - 1)), 0.9);
   }
   return stats;
 }
