@@ -52,9 +52,12 @@ void Overview::add(const cv::Mat& band) {
     for (int x = 0; x < band.cols; ++x) {
       const auto i = static_cast<std::size_t>(x / factor_);
       ++block_pixels_[i];
-      if (row[x][3] == 0) continue;
-      for (int c = 0; c < 3; ++c) sums_[4 * i + static_cast<std::size_t>(c)] += row[x][c];
-      sums_[4 * i + 3] += 1;
+      // Weighted by alpha: a picture's own pixels are 0 or 255, an overview's (a pyramid's
+      // lower levels, deep_zoom.hpp) the share of pixels they stand for.
+      const double alpha = row[x][3];
+      if (alpha == 0) continue;
+      for (int c = 0; c < 3; ++c) sums_[4 * i + static_cast<std::size_t>(c)] += alpha * row[x][c];
+      sums_[4 * i + 3] += alpha;
     }
     ++rows_added_;
     if (rows_added_ % factor_ == 0 || rows_added_ == size_.height) emit_row();
@@ -65,12 +68,12 @@ void Overview::emit_row() {
   auto* row = out_.ptr<cv::Vec4b>((rows_added_ - 1) / factor_);
   for (int x = 0; x < out_.cols; ++x) {
     const auto i = static_cast<std::size_t>(x);
-    const double opaque = sums_[4 * i + 3];
-    if (opaque > 0) {
+    const double weight = sums_[4 * i + 3];
+    if (weight > 0) {
       for (int c = 0; c < 3; ++c)
         row[x][c] =
-            cv::saturate_cast<std::uint8_t>(std::lround(sums_[4 * i + static_cast<std::size_t>(c)] / opaque));
-      row[x][3] = cv::saturate_cast<std::uint8_t>(std::lround(255.0 * opaque / block_pixels_[i]));
+            cv::saturate_cast<std::uint8_t>(std::lround(sums_[4 * i + static_cast<std::size_t>(c)] / weight));
+      row[x][3] = cv::saturate_cast<std::uint8_t>(std::lround(weight / block_pixels_[i]));
     }
   }
   std::fill(sums_.begin(), sums_.end(), 0.0);

@@ -1,8 +1,9 @@
 #pragma once
 // A picture of the report (BGRA, maps.hpp) gathered a band of rows at a time
 // into its overview: the picture itself when it fits the page's pixel budget,
-// else each factor × factor block of it averaged into one pixel (over the
-// block's opaque pixels; alpha is the block's opaque share), so that a result
+// else each factor × factor block of it averaged into one pixel (its colours
+// weighted by alpha, alpha the block's mean: over a picture's opaque pixels,
+// alpha their share of the block), so that a result
 // larger than memory is drawn without holding its full-size pictures.
 
 #include <opencv2/core.hpp>

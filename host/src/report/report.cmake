@@ -24,6 +24,7 @@ target_sources(lightstage_host PRIVATE
   src/report/html.cpp
   src/report/maps.cpp
   src/report/overview.cpp
+  src/report/deep_zoom.cpp  # Deep Zoom pyramids of pictures too large for a page
   src/report/result_maps.cpp
   src/report/svg.cpp
   src/report/light_statistics.cpp
