@@ -55,6 +55,16 @@ void add_report(CLI::App& app) {
   sub->add_option("--viewer-max-pixels", args->options.viewer_max_pixels,
                   "largest image the viewer embeds; larger results are subsampled")
       ->capture_default_str();
+  sub->add_option("--pyramids", args->options.pyramids,
+                  "Deep Zoom pyramids (.dzi and tiles) of the normals and albedo at full size in OUT_files/ "
+                  "beside the page: auto (when the result is larger than the page's pictures, 2^21 pixels), "
+                  "always or never")
+      ->check(CLI::IsMember({"auto", "always", "never"}))
+      ->capture_default_str();
+  sub->add_option("--pyramid-format", args->options.pyramid_format,
+                  "the pyramids' tiles: png (lossless, transparent background) or jpg (smaller, over black)")
+      ->check(CLI::IsMember({"png", "jpg"}))
+      ->capture_default_str();
   sub->add_flag("--json", args->json, "print what was written as JSON");
   sub->callback([args] {
     report::ReportOptions options = args->options;
@@ -71,6 +81,7 @@ void add_report(CLI::App& app) {
     }
     fmt::print("wrote {} ({:.1f} MB, {} sections)\n", summary.file.string(),
                static_cast<double>(summary.bytes) / 1e6, summary.sections.size());
+    for (const auto& pyramid : summary.pyramids) fmt::print("  pyramid: {}\n", pyramid.string());
     for (const auto& note : summary.notes) fmt::print("  note: {}\n", note);
   });
 }

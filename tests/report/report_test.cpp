@@ -7,6 +7,7 @@
 #include "lightstage/host/io/solve_output.hpp"
 #include "lightstage/host/io/stack_io.hpp"
 #include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/report/deep_zoom.hpp"
 #include "lightstage/host/report/light_statistics.hpp"
 #include "lightstage/host/report/viewer_data.hpp"
 #include "lightstage/host/solvers/lambertian.hpp"
@@ -481,6 +482,48 @@ TEST(Report, PicturesOfAResultOverTheBudgetAreBlockMeansOfTheFullPictures) {
       }
     }
   }
+}
+
+// A result over the page's picture budget gets full-size Deep Zoom pyramids beside the page, linked from
+// it, their last level the full pictures; "never" and a result within the budget get none.
+TEST(Report, AResultOverThePictureBudgetGetsFullSizePyramidsBesideThePage) {
+  const auto dir = testing::scratch_dir();
+  const auto result = result_with_every_map(dir);
+  const std::string full = report::render_report(result);
+  report::ReportOptions options;
+  options.picture_max_pixels = 300;
+  const report::ReportSummary summary = report::write_report(result, dir / "page.html", options);
+  ASSERT_EQ(summary.pyramids.size(), 2u);
+  EXPECT_EQ(summary.pyramids[0], dir / "page_files" / "normal.dzi");
+  EXPECT_EQ(summary.pyramids[1], dir / "page_files" / "albedo.dzi");
+  const std::string page = testing::read_text(dir / "page.html");
+  EXPECT_NE(page.find("<a href=\"page_files/normal.dzi\">"), std::string::npos);
+  EXPECT_NE(page.find("<a href=\"page_files/albedo.dzi\">"), std::string::npos);
+  EXPECT_EQ(summary.to_json()["pyramids"].size(), 2u);
+  const int top = report::deep_zoom_levels({kSize, kSize}) - 1;
+  for (const auto& [alt, name] : {std::pair{"normal map", "normal"}, std::pair{"albedo", "albedo"}}) {
+    EXPECT_NE(testing::read_text(dir / "page_files" / (std::string(name) + ".dzi"))
+                  .find(fmt::format("<Size Width=\"{}\" Height=\"{}\"/>", kSize, kSize)),
+              std::string::npos);
+    // One tile holds the whole 32×32 picture at the last level: the full-size page picture.
+    const cv::Mat tile = cv::imread(
+        (dir / "page_files" / (std::string(name) + "_files") / std::to_string(top) / "0_0.png").string(),
+        cv::IMREAD_UNCHANGED);
+    const cv::Mat big = picture(full, alt);
+    ASSERT_EQ(tile.size(), big.size()) << alt;
+    EXPECT_EQ(cv::norm(tile, big, cv::NORM_INF), 0) << alt;
+  }
+
+  options.pyramids = "never";
+  EXPECT_TRUE(report::write_report(result, dir / "never.html", options).pyramids.empty());
+  EXPECT_FALSE(fs::exists(dir / "never_files"));
+  EXPECT_TRUE(report::write_report(result, dir / "within.html").pyramids.empty()) << "within the budget";
+  EXPECT_FALSE(fs::exists(dir / "within_files"));
+  options.pyramids = "sometimes";
+  EXPECT_NE(testing::error_of([&] {
+              report::write_report(result, dir / "bad.html", options);
+            }).find("--pyramids: auto, always or never, got 'sometimes'"),
+            std::string::npos);
 }
 
 TEST(Report, ABadCropOrABrokenGroundTruthInTheStackIsANoteNotAFailure) {

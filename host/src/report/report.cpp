@@ -265,7 +265,7 @@ std::string viewer_section(const SurfaceModel& model, const Inputs& in) {
   return html;
 }
 
-std::string surface_section(const ResultPictures& pictures) {
+std::string surface_section(const ResultPictures& pictures, const fs::path& pyramid_dir) {
   std::string html = "<div class=\"row\">\n";
   html +=
       figure(png_data_uri(pictures.normals), "normal map",
@@ -279,6 +279,19 @@ std::string surface_section(const ResultPictures& pictures) {
                              pictures.colour_albedo ? "Colour albedo (linear)" : "Albedo",
                              format_number(pictures.albedo_shown)));
   html += "</div>\n";
+  if (!pictures.pyramids.empty()) {
+    // Relative links: the page and its folder move together.
+    std::vector<std::string> links;
+    for (const DeepZoomSummary& pyramid : pictures.pyramids) {
+      const std::string href = pyramid_dir.filename().string() + "/" + pyramid.descriptor.filename().string();
+      links.push_back(fmt::format("<a href=\"{}\">{}</a>", escape_html(href), escape_html(href)));
+    }
+    html += fmt::format(
+        "<p class=\"note\">Full resolution ({}x{}, {} levels): {}, Deep Zoom pyramids for a Deep Zoom "
+        "viewer (OpenSeadragon and others).</p>\n",
+        pictures.pyramids.front().size.width, pictures.pyramids.front().size.height,
+        pictures.pyramids.front().levels, fmt::join(links, " and "));
+  }
   return html;
 }
 
@@ -573,6 +586,10 @@ void ReportOptions::check() const {
   if (picture_max_pixels < 1) fail("report: picture_max_pixels must be ≥ 1, got {}", picture_max_pixels);
   if (band_rows < 0) fail("report: band_rows must be ≥ 0, got {}", band_rows);
   if (threads < 0) fail("report: threads must be 0 (every core) or positive, got {}", threads);
+  if (pyramids != "auto" && pyramids != "always" && pyramids != "never")
+    fail("--pyramids: auto, always or never, got '{}'", pyramids);
+  if (pyramid_format != "png" && pyramid_format != "jpg")
+    fail("--pyramid-format: png or jpg, got '{}'", pyramid_format);
   if (shadow_threshold && (!(*shadow_threshold >= 0) || !std::isfinite(*shadow_threshold)))
     fail("report: shadow_threshold must be a number ≥ 0, got {}", *shadow_threshold);
   if (ground_truth && !fs::exists(*ground_truth))
@@ -598,16 +615,30 @@ std::size_t report_memory_bytes(int width, int height, const ReportOptions& opti
       pixels * kMapPixelBytesLeast <= options.kept_map_bytes
           ? std::max(kReportBandBytes, std::min(pixels * kMapPixelBytesMost, options.kept_map_bytes))
           : kReportBandBytes;
-  return pixels * kWholeImageBytes + maps +
+  // Pyramids: the level under the picture whole (a quarter of its BGRA pixels) and a strip of tiles, for
+  // the normals and the albedo.
+  const bool pyramids =
+      options.pyramids == "always" ||
+      (options.pyramids == "auto" && pixels > static_cast<std::size_t>(options.picture_max_pixels));
+  const std::size_t pyramid_bytes =
+      pyramids ? 2 * (pixels + static_cast<std::size_t>(std::max(width, 0)) * 256 * 4 * 3) : 0;
+  return pixels * kWholeImageBytes + maps + pyramid_bytes +
          std::min(pixels, static_cast<std::size_t>(options.picture_max_pixels)) * kPictureBytes +
          std::min(pixels, static_cast<std::size_t>(options.viewer_max_pixels)) * kViewerBytes;
 }
 
 nlohmann::json ReportSummary::to_json() const {
-  return {{"file", file.string()}, {"bytes", bytes}, {"sections", sections}, {"notes", notes}};
+  nlohmann::json written = nlohmann::json::array();
+  for (const auto& pyramid : pyramids) written.push_back(pyramid.string());
+  return {{"file", file.string()},
+          {"bytes", bytes},
+          {"sections", sections},
+          {"notes", notes},
+          {"pyramids", written}};
 }
 
-std::string render_report(const fs::path& result_dir, const ReportOptions& options, ReportSummary* summary) {
+std::string render_report(const fs::path& result_dir, const ReportOptions& options, ReportSummary* summary,
+                          const fs::path& pyramid_dir) {
   options.check();
   if (!fs::is_directory(result_dir)) fail("{}: not a folder (expected a solve result)", result_dir.string());
   if (!fs::exists(result_dir / "normal.png"))
@@ -624,6 +655,14 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
   sources.kept_bytes = options.kept_map_bytes;
   sources.picture_max_pixels = options.picture_max_pixels;
   sources.viewer_max_pixels = options.viewer_max_pixels;
+  const bool pyramids = options.pyramids == "always" ||
+                        (options.pyramids == "auto" && static_cast<double>(size.width) * size.height >
+                                                           static_cast<double>(options.picture_max_pixels));
+  if (pyramids && !pyramid_dir.empty()) {
+    sources.pyramid_dir = pyramid_dir;
+    sources.pyramid.format = options.pyramid_format;
+    sources.pyramid.threads = options.threads;
+  }
   sources.albedo_scale = in.summary.value(
       folder.has_albedo() && folder.has_chroma() ? "albedo_rgb_png_scale" : "albedo_png_scale", 0.0);
 
@@ -686,7 +725,7 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
   std::string viewer_html, surface_html, depth_html, residual_html, error_html;
   const std::vector<std::function<void()>> encoded = {
       [&] { viewer_html = viewer_section(pictures.viewer, in); },
-      [&] { surface_html = surface_section(pictures); },
+      [&] { surface_html = surface_section(pictures, pyramid_dir); },
       [&] {
         if (pictures.depth) depth_html = depth_section(*pictures.depth, depth_unit, 0);
       },
@@ -745,6 +784,7 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
   if (summary) {
     summary->sections = page.sections();
     summary->notes = in.notes;
+    for (const DeepZoomSummary& pyramid : pictures.pyramids) summary->pyramids.push_back(pyramid.descriptor);
   }
   return html;
 }
@@ -754,8 +794,9 @@ ReportSummary write_report(const fs::path& result_dir, const fs::path& out, cons
   if (!out.empty() && (out.extension() != ".html" || fs::is_directory(out)))
     fail("--out {}: the report is one HTML file; name a new .html file", out.string());
   ReportSummary summary;
-  const std::string html = render_report(result_dir, options, &summary);
   summary.file = out.empty() ? result_dir / "report.html" : out;
+  const std::string html = render_report(
+      result_dir, options, &summary, summary.file.parent_path() / (summary.file.stem().string() + "_files"));
   if (summary.file.has_parent_path()) {
     std::error_code error;
     fs::create_directories(summary.file.parent_path(), error);

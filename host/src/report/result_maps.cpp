@@ -210,12 +210,27 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
     error.histogram = HistogramCounts(error.high, 40);
   }
   bool method_map_ok = sources.method_map != nullptr;
+  std::unique_ptr<DeepZoomWriter> normal_pyramid, albedo_pyramid;
+  if (!sources.pyramid_dir.empty()) {
+    fs::create_directories(sources.pyramid_dir);
+    normal_pyramid =
+        std::make_unique<DeepZoomWriter>(sources.pyramid_dir / "normal.dzi", size, sources.pyramid);
+    albedo_pyramid =
+        std::make_unique<DeepZoomWriter>(sources.pyramid_dir / "albedo.dzi", size, sources.pyramid);
+  }
   for_each_band([&](int y0, int rows) {
     const io::SolveFolder band = read_maps(y0, rows);
-    normals.add(normal_colours(band.normals, band.solved));
+    const cv::Mat normal_picture = normal_colours(band.normals, band.solved);
+    normals.add(normal_picture);
     const cv::Mat grey_albedo =
         band.albedo.empty() ? cv::Mat(band.solved.size(), CV_32FC1, cv::Scalar(0)) : band.albedo;
-    albedo.add(grey(out.colour_albedo ? band.colour_albedo() : grey_albedo, band.solved, out.albedo_shown));
+    const cv::Mat albedo_picture =
+        grey(out.colour_albedo ? band.colour_albedo() : grey_albedo, band.solved, out.albedo_shown);
+    albedo.add(albedo_picture);
+    if (normal_pyramid) {
+      normal_pyramid->add(normal_picture);
+      albedo_pyramid->add(albedo_picture);
+    }
     if (sources.depth) {
       // One row more on either side: the relief's slopes at the band's edges.
       const int top = std::max(0, y0 - 1), bottom = std::min(height, y0 + rows + 1);
@@ -251,6 +266,7 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   });
   out.normals = normals.finish();
   out.albedo = albedo.finish();
+  if (normal_pyramid) out.pyramids = {normal_pyramid->finish(), albedo_pyramid->finish()};
   if (sources.depth) {
     depth_pictures.shaded = shaded.finish();
     depth_pictures.colour = depth_colour.finish();

@@ -13,6 +13,7 @@
 #include "lightstage/host/io/normal_map.hpp"
 #include "lightstage/host/io/row_reader.hpp"
 #include "lightstage/host/io/solve_folder_rows.hpp"
+#include "lightstage/host/report/deep_zoom.hpp"
 #include "lightstage/host/report/viewer_data.hpp"
 #include "report/svg.hpp"
 
@@ -61,6 +62,9 @@ struct MapSources {
   std::size_t kept_bytes = 0;                 // maps that fit are one band, read once (ReportOptions)
   int picture_max_pixels = 1 << 21;
   int viewer_max_pixels = 1 << 20;
+  // Not empty: Deep Zoom pyramids of the normal and albedo pictures at full size go there.
+  std::filesystem::path pyramid_dir;
+  DeepZoomOptions pyramid;
 };
 
 // A band's working set, for choosing band_rows.
@@ -89,6 +93,7 @@ struct ResultPictures {
   double residual_high = 0;
   std::optional<ErrorPictures> error;
   SurfaceModel viewer;
+  std::vector<DeepZoomSummary> pyramids;  // normals, albedo (MapSources::pyramid_dir)
 };
 
 ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& notes);

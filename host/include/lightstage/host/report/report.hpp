@@ -58,15 +58,22 @@ struct ReportOptions {
   // The page's sections (their pictures, the viewer's payload) are made side
   // by side on this many threads (0 = every core); 1 holds one at a time.
   int threads = 0;
+  // Deep Zoom pyramids of the normal and albedo pictures at the result's full
+  // size, beside the page in PAGE_files/ (deep_zoom.hpp): "auto" when the
+  // result is larger than picture_max_pixels (the page's pictures are then
+  // overviews), "always" or "never"; their tiles' format (png or jpg).
+  std::string pyramids = "auto";
+  std::string pyramid_format = "png";
 
   void check() const;  // throws InputError naming the field and value
 };
 
 struct ReportSummary {
-  std::filesystem::path file;         // the page written
-  std::size_t bytes = 0;              // its size
-  std::vector<std::string> sections;  // ids of the sections present, in page order
-  std::vector<std::string> notes;     // what was left out or approximated, and why
+  std::filesystem::path file;                   // the page written
+  std::size_t bytes = 0;                        // its size
+  std::vector<std::string> sections;            // ids of the sections present, in page order
+  std::vector<std::string> notes;               // what was left out or approximated, and why
+  std::vector<std::filesystem::path> pyramids;  // the Deep Zoom descriptors written (.dzi)
 
   nlohmann::json to_json() const;
 };
@@ -78,9 +85,10 @@ struct ReportSummary {
 std::size_t report_memory_bytes(int width, int height, const ReportOptions& options = {});
 
 // Builds the page for `result_dir`. `summary`, when given, receives the same
-// information write_report returns (without file and bytes).
+// information write_report returns (without file and bytes). Pyramids, when
+// options ask for them, go to `pyramid_dir` (none when it is empty).
 std::string render_report(const std::filesystem::path& result_dir, const ReportOptions& options = {},
-                          ReportSummary* summary = nullptr);
+                          ReportSummary* summary = nullptr, const std::filesystem::path& pyramid_dir = {});
 
 // render_report, written atomically to `out` (default RESULT_DIR/report.html).
 // Throws InputError for an `out` that is not a .html file name (so it cannot
