@@ -177,6 +177,9 @@ DeepZoomSummary DeepZoomWriter::finish() {
   DeepZoomSummary summary;
   summary.descriptor = s.descriptor;
   summary.size = s.size;
+  summary.tile_size = s.options.tile_size;
+  summary.overlap = s.options.overlap;
+  summary.format = s.options.format;
   summary.levels = s.levels;
   summary.tiles = s.tiles;
   summary.bytes = s.bytes + xml.size();

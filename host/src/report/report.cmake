@@ -12,11 +12,31 @@ set(LIGHTSTAGE_REPORT_WEB_FILES
 set(LIGHTSTAGE_REPORT_CSS ${CMAKE_CURRENT_SOURCE_DIR}/src/report/web/report.css)
 set(LIGHTSTAGE_REPORT_GENERATED ${CMAKE_CURRENT_BINARY_DIR}/generated/report_web_assets.hpp)
 
+# The zoom page's OpenSeadragon (npm, web/zoom/package-lock.json), installed into the build tree.
+find_program(LIGHTSTAGE_NPM npm)
+if(NOT LIGHTSTAGE_NPM)
+  message(FATAL_ERROR "The report's zoom page embeds OpenSeadragon from npm: run scripts/install-deps.sh")
+endif()
+set(LIGHTSTAGE_REPORT_ZOOM_WEB ${CMAKE_CURRENT_SOURCE_DIR}/src/report/web/zoom)
+set(LIGHTSTAGE_REPORT_ZOOM_BUILD ${CMAKE_CURRENT_BINARY_DIR}/report-zoom)
+add_custom_command(OUTPUT ${LIGHTSTAGE_REPORT_ZOOM_BUILD}/npm_ci.stamp
+  COMMAND ${PROJECT_SOURCE_DIR}/cmake/npm_ci.sh ${LIGHTSTAGE_REPORT_ZOOM_WEB} ${LIGHTSTAGE_REPORT_ZOOM_BUILD}
+  COMMAND ${CMAKE_COMMAND} -E touch ${LIGHTSTAGE_REPORT_ZOOM_BUILD}/npm_ci.stamp
+  DEPENDS ${LIGHTSTAGE_REPORT_ZOOM_WEB}/package.json ${LIGHTSTAGE_REPORT_ZOOM_WEB}/package-lock.json
+          ${PROJECT_SOURCE_DIR}/cmake/npm_ci.sh
+  COMMENT "Installing the report zoom page's npm packages"
+  VERBATIM)
+set(LIGHTSTAGE_REPORT_ZOOM_SCRIPTS
+  ${LIGHTSTAGE_REPORT_ZOOM_BUILD}/node_modules/openseadragon/build/openseadragon/openseadragon.min.js
+  ${CMAKE_CURRENT_SOURCE_DIR}/src/report/web/zoom.js)
+
 add_custom_command(
   OUTPUT ${LIGHTSTAGE_REPORT_GENERATED}
   COMMAND ${CMAKE_COMMAND} -DOUT=${LIGHTSTAGE_REPORT_GENERATED} "-DSCRIPTS=${LIGHTSTAGE_REPORT_WEB_FILES}"
-          -DCSS=${LIGHTSTAGE_REPORT_CSS} -P ${CMAKE_CURRENT_SOURCE_DIR}/src/report/embed_web.cmake
+          -DCSS=${LIGHTSTAGE_REPORT_CSS} "-DZOOM_SCRIPTS=${LIGHTSTAGE_REPORT_ZOOM_SCRIPTS}"
+          -P ${CMAKE_CURRENT_SOURCE_DIR}/src/report/embed_web.cmake
   DEPENDS ${LIGHTSTAGE_REPORT_WEB_FILES} ${LIGHTSTAGE_REPORT_CSS} ${CMAKE_CURRENT_SOURCE_DIR}/src/report/embed_web.cmake
+          ${LIGHTSTAGE_REPORT_ZOOM_BUILD}/npm_ci.stamp ${CMAKE_CURRENT_SOURCE_DIR}/src/report/web/zoom.js
   COMMENT "Embedding the report viewer's JavaScript and CSS"
   VERBATIM)
 

@@ -31,6 +31,7 @@
 #include <cmath>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <numbers>
 #include <vector>
 
@@ -281,18 +282,66 @@ std::string surface_section(const ResultPictures& pictures, const fs::path& pyra
   html += "</div>\n";
   if (!pictures.pyramids.empty()) {
     // Relative links: the page and its folder move together.
+    const std::string folder = pyramid_dir.filename().string();
     std::vector<std::string> links;
     for (const DeepZoomSummary& pyramid : pictures.pyramids) {
-      const std::string href = pyramid_dir.filename().string() + "/" + pyramid.descriptor.filename().string();
+      const std::string href = folder + "/" + pyramid.descriptor.filename().string();
       links.push_back(fmt::format("<a href=\"{}\">{}</a>", escape_html(href), escape_html(href)));
     }
     html += fmt::format(
-        "<p class=\"note\">Full resolution ({}x{}, {} levels): {}, Deep Zoom pyramids for a Deep Zoom "
-        "viewer (OpenSeadragon and others).</p>\n",
-        pictures.pyramids.front().size.width, pictures.pyramids.front().size.height,
+        "<p class=\"note\">Full resolution ({}x{}): <a href=\"{}/zoom.html\">zoom in</a> on the normals "
+        "and albedo, from their Deep Zoom pyramids ({} levels: {}; any Deep Zoom viewer opens them).</p>\n",
+        pictures.pyramids.front().size.width, pictures.pyramids.front().size.height, escape_html(folder),
         pictures.pyramids.front().levels, fmt::join(links, " and "));
   }
   return html;
+}
+
+// PAGE_files/zoom.html: the pyramids in OpenSeadragon (web/zoom.js), a link back to PAGE.html.
+void write_zoom_page(const ResultPictures& pictures, const fs::path& pyramid_dir,
+                     const fs::path& result_dir) {
+  nlohmann::ordered_json sources = nlohmann::ordered_json::object();  // in page order: the first is shown
+  const std::map<std::string, std::pair<std::string, std::string>> text = {
+      {"normal", {"Normals", "Normals, colour = (n + 1) / 2: red = x (right), green = y (up), blue = z."}},
+      {"albedo", {"Albedo", fmt::format("Albedo, white at {}.", format_number(pictures.albedo_shown))}}};
+  for (const DeepZoomSummary& pyramid : pictures.pyramids) {
+    const std::string name = pyramid.descriptor.stem().string();
+    const auto& [label, caption] = text.at(name);
+    sources[name] = {{"label", label},
+                     {"caption", caption},
+                     {"tiles", name + "_files/"},
+                     {"format", pyramid.format},
+                     {"tile_size", pyramid.tile_size},
+                     {"overlap", pyramid.overlap},
+                     {"width", pyramid.size.width},
+                     {"height", pyramid.size.height}};
+  }
+  std::string folder = pyramid_dir.filename().string();
+  const std::string page = folder.substr(0, folder.size() - std::string("_files").size()) + ".html";
+  // "</" cannot end the JSON's script element early.
+  std::string json = sources.dump();
+  for (std::size_t at = json.find("</"); at != std::string::npos; at = json.find("</", at))
+    json.replace(at, 2, "<\\/");
+  std::string html =
+      "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+      "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+      "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; img-src 'self' file: data: "
+      "blob:; style-src 'unsafe-inline'; script-src 'unsafe-inline'\">\n";
+  html +=
+      "<title>Lightstage: " + escape_html(fs::absolute(result_dir).lexically_normal().filename().string()) +
+      " at full resolution</title>\n<style>\n"
+      "html, body { margin: 0; height: 100%; background: #1e1e1e; color: #ddd; font: 14px system-ui, "
+      "sans-serif; }\n"
+      "header { height: 36px; display: flex; gap: 12px; align-items: center; padding: 0 10px; }\n"
+      "button[aria-pressed=true] { font-weight: bold; }\n a { color: #9cf; }\n"
+      "#zoom { position: absolute; top: 36px; bottom: 0; left: 0; right: 0; }\n</style>\n</head>\n<body>\n"
+      "<header><a href=\"../" +
+      escape_html(page) +
+      "\">report</a><span id=\"pictures\"></span>"
+      "<span id=\"caption\"></span><span>drag to pan, wheel or +/- to zoom</span></header>\n"
+      "<div id=\"zoom\"></div>\n<script type=\"application/json\" id=\"lightstage-zoom-sources\">" +
+      json + "</script>\n<script>\n" + std::string(web::kZoomScript) + "</script>\n</body>\n</html>\n";
+  util::write_text_atomic(pyramid_dir / "zoom.html", html);
 }
 
 // How depth.pfm's values read: the integration's camera (surface.json beside it).
@@ -713,6 +762,7 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
 
   sources.truth = ground_truth(in, options, size);
   const ResultPictures pictures = draw_result_maps(sources, in.notes);
+  if (!pictures.pyramids.empty()) write_zoom_page(pictures, pyramid_dir, result_dir);
   in.notes.insert(in.notes.end(), depth_notes.begin(), depth_notes.end());
   if (pictures.factor > 1)
     in.notes.push_back(

@@ -36,6 +36,8 @@ struct DeepZoomOptions {
 struct DeepZoomSummary {
   std::filesystem::path descriptor;  // NAME.dzi
   cv::Size size;
+  int tile_size = 0, overlap = 0;
+  std::string format;
   int levels = 0;  // 0 .. levels - 1
   std::size_t tiles = 0;
   std::size_t bytes = 0;  // the tiles' and the descriptor's
