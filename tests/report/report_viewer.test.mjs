@@ -4,7 +4,8 @@
 // that every image loaded, nothing was logged as an error, no request left the
 // page, the keyboard moves the light, and that after a scripted pointer drag on
 // the hemisphere the canvas matches `lightstage relight` for the same light
-// (mean difference < 1%); the same for a bi-polynomial (glossy, colour) solve.
+// (mean difference < 1%); the same for a bi-polynomial (glossy, colour) solve;
+// and that the zoom page of a result's Deep Zoom pyramids shows its own pixels.
 // Screenshots: SCRATCH/screenshot.png and viewer.png (SCRATCH/glossy/ for the second).
 //
 // Environment (set by tests/report/CMakeLists.txt):
@@ -337,5 +338,73 @@ test('the ball relit in colour at a held-out light looks like its photograph', a
     }
   }, { width: photo.width, height: photo.height, colour: shown.colour, photoRgb: Array.from(photoRgb), scale });
   await page.screenshot({ path: path.join(dir, 'holdout.png'), fullPage: true });
+  await page.close();
+});
+
+// A result's Deep Zoom pyramids (`report --pyramids always`): the zoom page
+// opens offline from file:, loads the last level's tiles at its deepest zoom
+// with no failure, and shows there the result's own pixels: the screen at an
+// image pixel's centre has that pixel's colour in the tile that holds it, for
+// the normals and the albedo. Screenshot: SCRATCH/zoom/zoom.png.
+test('the zoom page shows the full-size pyramids down to their own pixels, offline', async (t) => {
+  const dir = path.join(scratch, 'zoom');
+  fs.rmSync(dir, { recursive: true, force: true });
+  fs.mkdirSync(dir, { recursive: true });
+  const stack = path.join(dir, 'stack');
+  const result = path.join(dir, 'result');
+  lightstage(['simulate', '--scene', 'bumps', '--lights', 'distant', '--width', '600', '--height', '400',
+    '--out', stack]);
+  lightstage(['solve', '--input', stack, '--method', 'l2', '--out', result]);
+  const pageFile = path.join(dir, 'page.html');
+  const written = JSON.parse(lightstage(['report', result, '--out', pageFile, '--pyramids', 'always', '--json']));
+  const folder = path.join(dir, 'page_files');
+  assert.deepEqual(written.pyramids, [path.join(folder, 'normal.dzi'), path.join(folder, 'albedo.dzi')]);
+  assert.ok(fs.readFileSync(pageFile, 'utf8').includes('<a href="page_files/zoom.html">'), 'the report links the zoom page');
+
+  const context = await launch(t);
+  const page = await context.newPage();
+  const errors = [];
+  const requests = [];
+  page.on('console', (message) => {
+    if (message.type() === 'error') errors.push(`console: ${message.text()}`);
+  });
+  page.on('pageerror', (error) => errors.push(`page error: ${error.message}`));
+  page.on('request', (request) => requests.push(request.url()));
+  await page.goto(`file://${path.join(folder, 'zoom.html')}`, { waitUntil: 'load' });
+  await page.evaluate(() => window.lightstageZoom.ready);
+
+  const top = Math.ceil(Math.log2(600));  // the last level: the picture itself
+  const [px, py] = [300, 200];  // tile column 1 (x from 253), row 0 of tile size 254, overlap 1
+  for (const name of ['normal', 'albedo']) {
+    await page.evaluate((shown) => window.lightstageZoom.show(shown), name);
+    const at = await page.evaluate(([x, y]) => {
+      const { viewer } = window.lightstageZoom;
+      viewer.viewport.zoomTo(viewer.viewport.getMaxZoom(), viewer.viewport.imageToViewportCoordinates(x, y), true);
+      viewer.viewport.panTo(viewer.viewport.imageToViewportCoordinates(x, y), true);
+      const point = viewer.viewport.imageToViewerElementCoordinates(new OpenSeadragon.Point(x, y));
+      const box = viewer.element.getBoundingClientRect();
+      return [Math.floor(box.left + point.x), Math.floor(box.top + point.y)];
+    }, [px + 0.5, py + 0.5]);
+    await page.waitForFunction(() => window.lightstageZoom.viewer.world.getItemAt(0).getFullyLoaded(), null,
+      { timeout: 20000 });
+    const shot = path.join(dir, `${name}.png`);
+    await page.screenshot({ path: shot });
+    const screen = readImage(shot);
+    const tile = readImage(path.join(folder, `${name}_files`, String(top), '1_0.png'));
+    const s = (at[1] * screen.width + at[0]) * screen.channels;
+    const p = (py * tile.width + (px - 253)) * tile.channels;
+    for (let c = 0; c < 3; ++c) {
+      assert.ok(Math.abs(screen.data[s + c] - tile.data[p + c]) <= 6,
+        `${name}: channel ${c} on screen ${screen.data[s + c]}, in the tile ${tile.data[p + c]}`);
+    }
+    assert.ok(requests.some((url) => url.includes(`${name}_files/${top}/`)), `${name}: no tile of level ${top} loaded`);
+  }
+  await page.screenshot({ path: path.join(dir, 'zoom.png') });
+  const state = await page.evaluate(() => window.lightstageZoom.state);
+  assert.equal(state.tilesFailed, 0);
+  assert.ok(state.tilesLoaded > 0);
+  assert.deepEqual(errors, [], 'the page logged errors');
+  assert.deepEqual(requests.filter((url) => !url.startsWith('file:') && !url.startsWith('data:')), [],
+    'the page made network requests');
   await page.close();
 });
