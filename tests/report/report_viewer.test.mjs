@@ -93,21 +93,28 @@ async function launch(t) {
   return context;
 }
 
+// A new page and what it logs as errors and the requests it makes: `external`
+// those that leave the page's data: and file: URLs, `all` every one.
+async function watchedPage(context) {
+  const page = await context.newPage();
+  const watched = { page, errors: [], external: [], all: [] };
+  page.on('console', (message) => {
+    if (message.type() === 'error') watched.errors.push(`console: ${message.text()}`);
+  });
+  page.on('pageerror', (error) => watched.errors.push(`page error: ${error.message}`));
+  page.on('request', (request) => {
+    watched.all.push(request.url());
+    if (!request.url().startsWith('data:') && !request.url().startsWith('file:')) watched.external.push(request.url());
+  });
+  return watched;
+}
+
 // Opens `pageFile`, checks images, errors, requests, keyboard and a pointer
 // drag, and compares the canvas with the CLI's rendering of `resultDir` for
 // the dragged light. Screenshots and the CLI's images go to `outDir`.
 async function checkReport(context, pageFile, resultDir, outDir) {
   const summary = JSON.parse(fs.readFileSync(path.join(resultDir, 'summary.json'), 'utf8'));
-  const page = await context.newPage();
-  const errors = [];
-  const requests = [];
-  page.on('console', (message) => {
-    if (message.type() === 'error') errors.push(`console: ${message.text()}`);
-  });
-  page.on('pageerror', (error) => errors.push(`page error: ${error.message}`));
-  page.on('request', (request) => {
-    if (!request.url().startsWith('data:') && !request.url().startsWith('file:')) requests.push(request.url());
-  });
+  const { page, errors, external: requests } = await watchedPage(context);
   await page.goto(`file://${pageFile}`, { waitUntil: 'load' });
   await page.evaluate(() => window.lightstageViewer.ready);
 
@@ -362,14 +369,7 @@ test('the zoom page shows the full-size pyramids down to their own pixels, offli
   assert.ok(fs.readFileSync(pageFile, 'utf8').includes('<a href="page_files/zoom.html">'), 'the report links the zoom page');
 
   const context = await launch(t);
-  const page = await context.newPage();
-  const errors = [];
-  const requests = [];
-  page.on('console', (message) => {
-    if (message.type() === 'error') errors.push(`console: ${message.text()}`);
-  });
-  page.on('pageerror', (error) => errors.push(`page error: ${error.message}`));
-  page.on('request', (request) => requests.push(request.url()));
+  const { page, errors, external, all: requests } = await watchedPage(context);
   await page.goto(`file://${path.join(folder, 'zoom.html')}`, { waitUntil: 'load' });
   await page.evaluate(() => window.lightstageZoom.ready);
 
@@ -404,7 +404,6 @@ test('the zoom page shows the full-size pyramids down to their own pixels, offli
   assert.equal(state.tilesFailed, 0);
   assert.ok(state.tilesLoaded > 0);
   assert.deepEqual(errors, [], 'the page logged errors');
-  assert.deepEqual(requests.filter((url) => !url.startsWith('file:') && !url.startsWith('data:')), [],
-    'the page made network requests');
+  assert.deepEqual(external, [], 'the page made network requests');
   await page.close();
 });
