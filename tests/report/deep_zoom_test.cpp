@@ -135,6 +135,7 @@ void expect_pyramid(const cv::Mat& image, const DeepZoomOptions& options, int ba
   for (const auto& entry : fs::directory_iterator(dir)) names.push_back(entry.path().filename().string());
   std::sort(names.begin(), names.end());
   EXPECT_THAT(names, ::testing::ElementsAre("normal.dzi", "normal_files"));
+  EXPECT_TRUE(fs::exists(dir / "normal_files" / ".lightstage-pyramid"));
 }
 
 TEST(DeepZoom, LevelsHalveTheLongerSideDownToOnePixel) {
@@ -185,7 +186,32 @@ TEST(DeepZoom, ReplacesItsOwnPyramidButNoOtherFolder) {
   EXPECT_TRUE(fs::exists(dir / "albedo_files" / "6" / "0_0.png"));
   fs::create_directories(dir / "mine_files");
   EXPECT_THAT(error_of([&] { DeepZoomWriter(dir / "mine.dzi", image.size()); }),
-              HasSubstr((dir / "mine_files").string() + ": exists without mine.dzi"));
+              HasSubstr((dir / "mine_files").string() + ": exists and is not a pyramid lightstage wrote"));
+  // Tiles whose descriptor never came (a run stopped between the renames) are still its own.
+  fs::remove(dir / "albedo.dzi");
+  DeepZoomWriter again(dir / "albedo.dzi", image.size());
+  again.add(image);
+  again.finish();
+  EXPECT_TRUE(fs::exists(dir / "albedo.dzi"));
+}
+
+// The hidden folders of a run that was killed are swept by the next; other hidden folders are not.
+TEST(DeepZoom, AKilledRunsFoldersAreSweptByTheNext) {
+  const fs::path dir = lightstage::testing::scratch_dir();
+  const cv::Mat image = picture({40, 30}, 8);
+  {
+    DeepZoomWriter writer(dir / "normal.dzi", image.size());
+    writer.add(image);
+    writer.finish();
+  }
+  // What a killed run leaves: a copy of the tiles under its staging and replaced names.
+  for (const char* stale : {".normal_files.partial-999999", ".normal_files.old-999999"})
+    fs::copy(dir / "normal_files", dir / stale, fs::copy_options::recursive);
+  fs::create_directories(dir / ".normal_files.partial-1" / "notes");  // not a pyramid's
+  DeepZoomWriter writer(dir / "normal.dzi", image.size());
+  EXPECT_FALSE(fs::exists(dir / ".normal_files.partial-999999"));
+  EXPECT_FALSE(fs::exists(dir / ".normal_files.old-999999"));
+  EXPECT_TRUE(fs::exists(dir / ".normal_files.partial-1" / "notes"));
 }
 
 TEST(DeepZoom, AnInterruptedPyramidLeavesNothing) {

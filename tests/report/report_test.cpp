@@ -514,9 +514,26 @@ TEST(Report, AResultOverThePictureBudgetGetsFullSizePyramidsBesideThePage) {
     EXPECT_EQ(cv::norm(tile, big, cv::NORM_INF), 0) << alt;
   }
 
+  // A page name that is not a plain URL segment: its links are percent-encoded.
+  report::write_report(result, dir / "run #3.html", options);
+  EXPECT_NE(testing::read_text(dir / "run #3.html").find("<a href=\"run%20%233_files/zoom.html\">"),
+            std::string::npos);
+  EXPECT_NE(testing::read_text(dir / "run #3_files" / "zoom.html").find("<a href=\"../run%20%233.html\">"),
+            std::string::npos);
+  // A PAGE_files the report did not write is refused, not written into.
+  fs::create_directories(dir / "saved_files");
+  EXPECT_NE(testing::error_of([&] {
+              report::write_report(result, dir / "saved.html", options);
+            }).find("saved_files: exists and is not a folder a report wrote"),
+            std::string::npos);
+  EXPECT_TRUE(fs::is_empty(dir / "saved_files"));
+
   options.pyramids = "never";
   EXPECT_TRUE(report::write_report(result, dir / "never.html", options).pyramids.empty());
   EXPECT_FALSE(fs::exists(dir / "never_files"));
+  // The same page again without pyramids: the earlier ones go with it.
+  report::write_report(result, dir / "page.html", options);
+  EXPECT_FALSE(fs::exists(dir / "page_files"));
   EXPECT_TRUE(report::write_report(result, dir / "within.html").pyramids.empty()) << "within the budget";
   EXPECT_FALSE(fs::exists(dir / "within_files"));
   options.pyramids = "sometimes";

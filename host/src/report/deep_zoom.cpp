@@ -17,6 +17,25 @@
 
 namespace lightstage::report {
 namespace fs = std::filesystem;
+namespace {
+
+// In every tiles folder this writer makes, from its start: which folders are its own to replace or sweep.
+constexpr const char* kOwnerMark = ".lightstage-pyramid";
+
+bool written_here(const fs::path& folder) { return fs::exists(folder / kOwnerMark); }
+
+// Staging and replaced folders that runs which did not end left beside `files` (another process id).
+void sweep_stale(const fs::path& files) {
+  const std::string stem = "." + files.filename().string() + ".";
+  std::error_code error;
+  for (const auto& entry : fs::directory_iterator(files.parent_path(), error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(stem + "partial-", 0) != 0 && name.rfind(stem + "old-", 0) != 0) continue;
+    if (entry.is_directory() && written_here(entry.path())) fs::remove_all(entry.path(), error);
+  }
+}
+
+}  // namespace
 
 void DeepZoomOptions::check() const {
   if (tile_size < 1 || tile_size > 8192)
@@ -93,13 +112,15 @@ DeepZoomWriter::DeepZoomWriter(const fs::path& descriptor, cv::Size size, DeepZo
   State& s = *state_;
   s.descriptor = descriptor;
   s.files = descriptor.parent_path() / (descriptor.stem().string() + "_files");
-  // Only a pyramid this writer made (its descriptor beside it) is replaced.
-  if (fs::exists(s.files) && !fs::exists(descriptor))
-    fail("{}: exists without {} beside it (not a pyramid written here); remove it or write elsewhere",
-         s.files.string(), descriptor.filename().string());
+  // Only a pyramid this writer made (its mark inside) is replaced.
+  if (fs::exists(s.files) && !written_here(s.files))
+    fail("{}: exists and is not a pyramid lightstage wrote (no {} inside); remove it or write elsewhere",
+         s.files.string(), kOwnerMark);
+  sweep_stale(s.files);
   s.staging = s.files.parent_path() / fmt::format(".{}.partial-{}", s.files.filename().string(), ::getpid());
   fs::remove_all(s.staging);
   fs::create_directories(s.staging);
+  std::ofstream(s.staging / kOwnerMark) << "Deep Zoom tiles of " << descriptor.filename().string() << "\n";
   s.size = size;
   s.options = std::move(options);
   s.levels = deep_zoom_levels(size);
@@ -160,19 +181,34 @@ DeepZoomSummary DeepZoomWriter::finish() {
       "<Image xmlns=\"http://schemas.microsoft.com/deepzoom/2008\" TileSize=\"{}\" Overlap=\"{}\" "
       "Format=\"{}\">\n  <Size Width=\"{}\" Height=\"{}\"/>\n</Image>\n",
       s.options.tile_size, s.options.overlap, s.options.format, s.size.width, s.size.height);
-  // Into place: the tiles, then the descriptor that names them.
-  const fs::path old =
-      s.files.parent_path() / fmt::format(".{}.old-{}", s.files.filename().string(), ::getpid());
-  if (fs::exists(s.files)) fs::rename(s.files, old);
-  fs::rename(s.staging, s.files);
   const fs::path partial = s.descriptor.parent_path() / ("." + s.descriptor.filename().string() + ".partial");
   {
     std::ofstream out(partial, std::ios::binary);
     out << xml;
     if (!out.flush()) fail("{}: cannot write the descriptor", s.descriptor.string());
   }
-  fs::rename(partial, s.descriptor);
-  fs::remove_all(old);
+  // Into place: the tiles, then the descriptor that names them; a step that fails puts the earlier pyramid
+  // back.
+  const fs::path old =
+      s.files.parent_path() / fmt::format(".{}.old-{}", s.files.filename().string(), ::getpid());
+  const bool replacing = fs::exists(s.files);
+  if (replacing) fs::rename(s.files, old);
+  try {
+    fs::rename(s.staging, s.files);
+    try {
+      fs::rename(partial, s.descriptor);
+    } catch (...) {
+      fs::rename(s.files, s.staging);
+      throw;
+    }
+  } catch (...) {
+    std::error_code ignored;
+    if (replacing) fs::rename(old, s.files, ignored);
+    fs::remove(partial, ignored);
+    throw;
+  }
+  std::error_code ignored;
+  fs::remove_all(old, ignored);
   s.finished = true;
   DeepZoomSummary summary;
   summary.descriptor = s.descriptor;

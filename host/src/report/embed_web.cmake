@@ -1,7 +1,9 @@
-# cmake -DOUT=header -DSCRIPTS="a.js;b.js" -DCSS=report.css -DZOOM_SCRIPTS="c.js;d.js" -P embed_web.cmake
+# cmake -DOUT=header -DSCRIPTS="a.js;b.js" -DCSS=report.css -DZOOM_SCRIPTS="c.js;d.js"
+#       -DZOOM_LICENSES="LICENSE.txt" -P embed_web.cmake
 # Writes a header holding the viewer's script (the ES modules joined into one
 # module: lines starting with `import` dropped, a leading `export ` removed),
-# the page's CSS and the zoom page's classic scripts (joined as they are), as
+# the page's CSS and the zoom page's classic scripts (joined, source-map
+# comments dropped, the licenses of what they bundle first as a comment), as
 # C++ raw string literals.
 cmake_minimum_required(VERSION 3.25)
 set(delimiter "lsweb")
@@ -15,8 +17,14 @@ foreach(file IN LISTS SCRIPTS)
 endforeach()
 file(READ "${CSS}" css)
 set(zoom "")
+foreach(file IN LISTS ZOOM_LICENSES)
+  file(READ "${file}" text)
+  string(REPLACE "*/" "* /" text "${text}")
+  string(APPEND zoom "/*! ${text}*/\n")
+endforeach()
 foreach(file IN LISTS ZOOM_SCRIPTS)
   file(READ "${file}" text)
+  string(REGEX REPLACE "(^|\n)//# sourceMappingURL=[^\n]*" "\\1" text "${text}")
   string(APPEND zoom "${text}\n")
 endforeach()
 # (No foreach over the texts: their semicolons would split them into list items.)

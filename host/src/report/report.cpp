@@ -28,6 +28,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -266,6 +267,33 @@ std::string viewer_section(const SurfaceModel& model, const Inputs& in) {
   return html;
 }
 
+// A relative link's path segment: what is not unreserved (RFC 3986) percent-encoded, so that a page named
+// "run #3.html" links its folder and not a fragment.
+std::string url_segment(std::string_view text) {
+  std::string out;
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (std::isalnum(byte) || c == '-' || c == '.' || c == '_' || c == '~')
+      out += c;
+    else
+      out += fmt::format("%{:02X}", byte);
+  }
+  return out;
+}
+
+// PAGE_files/, the page's own folder (pyramids, zoom page) while this mark is in it.
+constexpr const char* kPageFolderMark = ".lightstage-report";
+
+// Makes `folder` ready for the page's files: refused when it exists and is not the report's.
+void claim_page_folder(const fs::path& folder) {
+  if (fs::exists(folder) && !fs::exists(folder / kPageFolderMark))
+    fail(
+        "{}: exists and is not a folder a report wrote (no {} inside); remove it or write the page elsewhere",
+        folder.string(), kPageFolderMark);
+  fs::create_directories(folder);
+  std::ofstream(folder / kPageFolderMark) << "files of the report page beside this folder\n";
+}
+
 std::string surface_section(const ResultPictures& pictures, const fs::path& pyramid_dir) {
   std::string html = "<div class=\"row\">\n";
   html +=
@@ -282,23 +310,24 @@ std::string surface_section(const ResultPictures& pictures, const fs::path& pyra
   html += "</div>\n";
   if (!pictures.pyramids.empty()) {
     // Relative links: the page and its folder move together.
-    const std::string folder = pyramid_dir.filename().string();
+    const std::string folder = url_segment(pyramid_dir.filename().string());
     std::vector<std::string> links;
     for (const DeepZoomSummary& pyramid : pictures.pyramids) {
-      const std::string href = folder + "/" + pyramid.descriptor.filename().string();
-      links.push_back(fmt::format("<a href=\"{}\">{}</a>", escape_html(href), escape_html(href)));
+      const std::string name = pyramid_dir.filename().string() + "/" + pyramid.descriptor.filename().string();
+      links.push_back(fmt::format("<a href=\"{}/{}\">{}</a>", folder,
+                                  url_segment(pyramid.descriptor.filename().string()), escape_html(name)));
     }
     html += fmt::format(
         "<p class=\"note\">Full resolution ({}x{}): <a href=\"{}/zoom.html\">zoom in</a> on the normals "
         "and albedo, from their Deep Zoom pyramids ({} levels: {}; any Deep Zoom viewer opens them).</p>\n",
-        pictures.pyramids.front().size.width, pictures.pyramids.front().size.height, escape_html(folder),
+        pictures.pyramids.front().size.width, pictures.pyramids.front().size.height, folder,
         pictures.pyramids.front().levels, fmt::join(links, " and "));
   }
   return html;
 }
 
-// PAGE_files/zoom.html: the pyramids in OpenSeadragon (web/zoom.js), a link back to PAGE.html.
-void write_zoom_page(const ResultPictures& pictures, const fs::path& pyramid_dir,
+// PAGE_files/zoom.html: the pyramids in OpenSeadragon (web/zoom.js), a link back to the page.
+void write_zoom_page(const ResultPictures& pictures, const fs::path& page_file, const fs::path& pyramid_dir,
                      const fs::path& result_dir) {
   nlohmann::ordered_json sources = nlohmann::ordered_json::object();  // in page order: the first is shown
   const std::map<std::string, std::pair<std::string, std::string>> text = {
@@ -316,8 +345,6 @@ void write_zoom_page(const ResultPictures& pictures, const fs::path& pyramid_dir
                      {"width", pyramid.size.width},
                      {"height", pyramid.size.height}};
   }
-  std::string folder = pyramid_dir.filename().string();
-  const std::string page = folder.substr(0, folder.size() - std::string("_files").size()) + ".html";
   // "</" cannot end the JSON's script element early.
   std::string json = sources.dump();
   for (std::size_t at = json.find("</"); at != std::string::npos; at = json.find("</", at))
@@ -326,7 +353,7 @@ void write_zoom_page(const ResultPictures& pictures, const fs::path& pyramid_dir
       "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
       "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
       "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; img-src 'self' file: data: "
-      "blob:; style-src 'unsafe-inline'; script-src 'unsafe-inline'\">\n";
+      "blob:; worker-src blob:; style-src 'unsafe-inline'; script-src 'unsafe-inline'\">\n";
   html +=
       "<title>Lightstage: " + escape_html(fs::absolute(result_dir).lexically_normal().filename().string()) +
       " at full resolution</title>\n<style>\n"
@@ -336,7 +363,7 @@ void write_zoom_page(const ResultPictures& pictures, const fs::path& pyramid_dir
       "button[aria-pressed=true] { font-weight: bold; }\n a { color: #9cf; }\n"
       "#zoom { position: absolute; top: 36px; bottom: 0; left: 0; right: 0; }\n</style>\n</head>\n<body>\n"
       "<header><a href=\"../" +
-      escape_html(page) +
+      url_segment(page_file.filename().string()) +
       "\">report</a><span id=\"pictures\"></span>"
       "<span id=\"caption\"></span><span>drag to pan, wheel or +/- to zoom</span></header>\n"
       "<div id=\"zoom\"></div>\n<script type=\"application/json\" id=\"lightstage-zoom-sources\">" +
@@ -670,7 +697,7 @@ std::size_t report_memory_bytes(int width, int height, const ReportOptions& opti
       options.pyramids == "always" ||
       (options.pyramids == "auto" && pixels > static_cast<std::size_t>(options.picture_max_pixels));
   const std::size_t pyramid_bytes =
-      pyramids ? 2 * (pixels + static_cast<std::size_t>(std::max(width, 0)) * 256 * 4 * 3) : 0;
+      pyramids ? 2 * (pixels * 5 / 4 + static_cast<std::size_t>(std::max(width, 0)) * 256 * 4 * 3) : 0;
   return pixels * kWholeImageBytes + maps + pyramid_bytes +
          std::min(pixels, static_cast<std::size_t>(options.picture_max_pixels)) * kPictureBytes +
          std::min(pixels, static_cast<std::size_t>(options.viewer_max_pixels)) * kViewerBytes;
@@ -687,7 +714,7 @@ nlohmann::json ReportSummary::to_json() const {
 }
 
 std::string render_report(const fs::path& result_dir, const ReportOptions& options, ReportSummary* summary,
-                          const fs::path& pyramid_dir) {
+                          const fs::path& page_file) {
   options.check();
   if (!fs::is_directory(result_dir)) fail("{}: not a folder (expected a solve result)", result_dir.string());
   if (!fs::exists(result_dir / "normal.png"))
@@ -707,7 +734,13 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
   const bool pyramids = options.pyramids == "always" ||
                         (options.pyramids == "auto" && static_cast<double>(size.width) * size.height >
                                                            static_cast<double>(options.picture_max_pixels));
+  // The page's folder: the pyramids and their zoom page, or none (a folder of an earlier page removed).
+  const fs::path pyramid_dir =
+      page_file.empty() ? fs::path() : page_file.parent_path() / (page_file.stem().string() + "_files");
+  if (!pyramid_dir.empty() && !pyramids && fs::exists(pyramid_dir / kPageFolderMark))
+    fs::remove_all(pyramid_dir);
   if (pyramids && !pyramid_dir.empty()) {
+    claim_page_folder(pyramid_dir);
     sources.pyramid_dir = pyramid_dir;
     sources.pyramid.format = options.pyramid_format;
     sources.pyramid.threads = options.threads;
@@ -762,7 +795,7 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
 
   sources.truth = ground_truth(in, options, size);
   const ResultPictures pictures = draw_result_maps(sources, in.notes);
-  if (!pictures.pyramids.empty()) write_zoom_page(pictures, pyramid_dir, result_dir);
+  if (!pictures.pyramids.empty()) write_zoom_page(pictures, page_file, pyramid_dir, result_dir);
   in.notes.insert(in.notes.end(), depth_notes.begin(), depth_notes.end());
   if (pictures.factor > 1)
     in.notes.push_back(
@@ -845,8 +878,7 @@ ReportSummary write_report(const fs::path& result_dir, const fs::path& out, cons
     fail("--out {}: the report is one HTML file; name a new .html file", out.string());
   ReportSummary summary;
   summary.file = out.empty() ? result_dir / "report.html" : out;
-  const std::string html = render_report(
-      result_dir, options, &summary, summary.file.parent_path() / (summary.file.stem().string() + "_files"));
+  const std::string html = render_report(result_dir, options, &summary, summary.file);
   if (summary.file.has_parent_path()) {
     std::error_code error;
     fs::create_directories(summary.file.parent_path(), error);

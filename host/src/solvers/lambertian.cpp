@@ -62,13 +62,15 @@ Counters solve_all(const Observations& obs, const L2Options& options, Maps& maps
     return total;
   }
   const Eigen::Matrix<double, 3, Eigen::Dynamic> pinv = gram.inverse() * lights.transpose();
-  std::vector<Counters> per_chunk(static_cast<std::size_t>(resolve_threads(options.threads)));
+  // Resolved once: the chunks must be no more than the counters made for them.
+  const int threads = resolve_threads(options.threads);
+  std::vector<Counters> per_chunk(static_cast<std::size_t>(threads));
   // Blocks of pixels as matrix products (S = I·P, as GEMM): the stack is read
   // once, from cache, instead of as one small product per pixel. The residual
   // needs no second pass: with s the least-squares solution,
   // |I − L s|² = |I|² − sᵀ(LᵀL)s.
   const Eigen::Matrix<double, Eigen::Dynamic, 3> pinv_t = pinv.transpose();
-  parallel_chunks(pixels, options.threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
+  parallel_chunks(pixels, threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
     Counters& counters = per_chunk[chunk];
     constexpr std::size_t kBlock = 64;
     Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> values(kBlock, images);
@@ -106,8 +108,10 @@ Counters solve_all(const Observations& obs, const L2Options& options, Maps& maps
 Counters solve_selected(const Observations& obs, const L2Options& options, Maps& maps) {
   const Eigen::Index images = static_cast<Eigen::Index>(obs.image_count());
   const std::size_t pixels = obs.pixel_count();
-  std::vector<Counters> per_chunk(static_cast<std::size_t>(resolve_threads(options.threads)));
-  parallel_chunks(pixels, options.threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
+  // Resolved once: the chunks must be no more than the counters made for them.
+  const int threads = resolve_threads(options.threads);
+  std::vector<Counters> per_chunk(static_cast<std::size_t>(threads));
+  parallel_chunks(pixels, threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
     Counters& counters = per_chunk[chunk];
     std::vector<Eigen::Index> kept;
     kept.reserve(static_cast<std::size_t>(images));

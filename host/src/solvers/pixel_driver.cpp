@@ -56,8 +56,10 @@ double run_per_pixel(const Observations& observations, const DriverSettings& set
   }
 
   const std::size_t pixels = observations.pixel_count();
-  std::vector<Counters> per_chunk(static_cast<std::size_t>(resolve_threads(settings.threads)));
-  parallel_chunks(pixels, settings.threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
+  // Resolved once: the chunks must be no more than the counters made for them.
+  const int threads = resolve_threads(settings.threads);
+  std::vector<Counters> per_chunk(static_cast<std::size_t>(threads));
+  parallel_chunks(pixels, threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
     Counters& counters = per_chunk[chunk];
     const PixelCore core = make_core();
     PixelObservations data;

@@ -18,10 +18,13 @@ namespace lightstage {
 // ThreadLimit in scope, else the hardware concurrency (at least 1).
 int resolve_threads(int requested);
 
-// Caps the work that asks for "all cores" (threads 0), here and in OpenCV,
-// while it lives: a command's --threads holds for every stage it runs
-// (decoding, solving, writing, the report) without each call being told.
-// 0 or less leaves the limit as it was. Limits nest; the destructor restores.
+// Caps the work that asks for "all cores" (threads 0), here and in OpenCV
+// (each of its parallel calls), while it lives: a command's --threads holds
+// for every stage it runs (decoding, solving, writing, the report) without
+// each call being told. 0 or less leaves the limit as it was. The limit is
+// the process's: make it on the thread that runs the command, before its
+// parallel work starts, and let it end after (limits nest, the destructor
+// restores the one before); jobs side by side cannot hold different limits.
 class ThreadLimit {
  public:
   explicit ThreadLimit(int threads);

@@ -11,9 +11,12 @@
 //
 // Memory: a strip of the picture (tile_size + 2·overlap rows) and the level
 // below it whole (a quarter of the pixels); the levels under that are made
-// from it at the end. Tiles go to a folder beside the final one, renamed into
-// place with the descriptor last, so an interrupted run leaves no half
-// pyramid under NAME; an earlier pyramid of the same name is replaced.
+// from it at the end. Tiles go to a hidden folder beside the final one,
+// renamed into place with the descriptor last, so an interrupted run leaves
+// no half-written tiles under NAME_files; an earlier pyramid of the same name
+// is replaced, and put back if that fails. A mark file inside each tiles
+// folder says it is one this writer made: only those are replaced, and the
+// hidden folders of runs that were killed are swept when the next one starts.
 
 #include <opencv2/core.hpp>
 

@@ -85,10 +85,13 @@ struct ReportSummary {
 std::size_t report_memory_bytes(int width, int height, const ReportOptions& options = {});
 
 // Builds the page for `result_dir`. `summary`, when given, receives the same
-// information write_report returns (without file and bytes). Pyramids, when
-// options ask for them, go to `pyramid_dir` (none when it is empty).
+// information write_report returns (without file and bytes). When the page
+// will be `page_file` (PAGE.html), the pyramids options ask for go to
+// PAGE_files/ beside it with their zoom page; a PAGE_files/ of an earlier
+// report is removed when there are none now, and one a report did not write
+// is refused. An empty `page_file` writes no files.
 std::string render_report(const std::filesystem::path& result_dir, const ReportOptions& options = {},
-                          ReportSummary* summary = nullptr, const std::filesystem::path& pyramid_dir = {});
+                          ReportSummary* summary = nullptr, const std::filesystem::path& page_file = {});
 
 // render_report, written atomically to `out` (default RESULT_DIR/report.html).
 // Throws InputError for an `out` that is not a .html file name (so it cannot
