@@ -673,6 +673,16 @@ void ReportOptions::check() const {
   if (calibration && !fs::exists(*calibration)) fail("--calibration {}: no such file", calibration->string());
 }
 
+namespace {
+
+// Whether a result of `pixels` gets pyramids: "always", or "auto" over the page's picture budget.
+bool writes_pyramids(const ReportOptions& options, std::size_t pixels) {
+  return options.pyramids == "always" ||
+         (options.pyramids == "auto" && pixels > static_cast<std::size_t>(options.picture_max_pixels));
+}
+
+}  // namespace
+
 std::size_t report_memory_bytes(int width, int height, const ReportOptions& options) {
   // Held for the whole image: the solved mask, the ground truth's mask, a double per compared pixel in a
   // growing vector (up to three while it moves).
@@ -693,9 +703,7 @@ std::size_t report_memory_bytes(int width, int height, const ReportOptions& opti
           : kReportBandBytes;
   // Pyramids: the level under the picture whole (a quarter of its BGRA pixels) and a strip of tiles, for
   // the normals and the albedo.
-  const bool pyramids =
-      options.pyramids == "always" ||
-      (options.pyramids == "auto" && pixels > static_cast<std::size_t>(options.picture_max_pixels));
+  const bool pyramids = writes_pyramids(options, pixels);
   const std::size_t pyramid_bytes =
       pyramids ? 2 * (pixels * 5 / 4 + static_cast<std::size_t>(std::max(width, 0)) * 256 * 4 * 3) : 0;
   return pixels * kWholeImageBytes + maps + pyramid_bytes +
@@ -731,9 +739,8 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
   sources.kept_bytes = options.kept_map_bytes;
   sources.picture_max_pixels = options.picture_max_pixels;
   sources.viewer_max_pixels = options.viewer_max_pixels;
-  const bool pyramids = options.pyramids == "always" ||
-                        (options.pyramids == "auto" && static_cast<double>(size.width) * size.height >
-                                                           static_cast<double>(options.picture_max_pixels));
+  const bool pyramids =
+      writes_pyramids(options, static_cast<std::size_t>(size.width) * static_cast<std::size_t>(size.height));
   // The page's folder: the pyramids and their zoom page, or none (a folder of an earlier page removed).
   const fs::path pyramid_dir =
       page_file.empty() ? fs::path() : page_file.parent_path() / (page_file.stem().string() + "_files");

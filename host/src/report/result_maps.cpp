@@ -212,7 +212,6 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   bool method_map_ok = sources.method_map != nullptr;
   std::unique_ptr<DeepZoomWriter> normal_pyramid, albedo_pyramid;
   if (!sources.pyramid_dir.empty()) {
-    fs::create_directories(sources.pyramid_dir);
     normal_pyramid =
         std::make_unique<DeepZoomWriter>(sources.pyramid_dir / "normal.dzi", size, sources.pyramid);
     albedo_pyramid =
