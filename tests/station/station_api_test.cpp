@@ -31,6 +31,7 @@ struct Answer {
   int status = 0;
   json body;
   std::string text;
+  std::string content_type;
 };
 
 // The simulated dome (64x64 sphere, no noise), the station and its server on a free port.
@@ -103,9 +104,9 @@ class StationUnderTest {
 
  private:
   static Answer answer(const httplib::Result& result) {
-    if (!result) return {-1, nullptr, "no answer"};
-    Answer a{result->status, json::parse(result->body, nullptr, false), result->body};
-    return a;
+    if (!result) return {-1, nullptr, "no answer", ""};
+    return {result->status, json::parse(result->body, nullptr, false), result->body,
+            result->get_header_value("Content-Type")};
   }
 
   std::unique_ptr<Station> station_;
@@ -321,6 +322,15 @@ TEST(StationApi, FilesStayInTheirFoldersAndActionsComeFromThePageOnLoopback) {
   std::ofstream(result / "notes.txt") << "kept\n";
   std::ofstream(result / ".bands-1.spill") << "not served\n";
   EXPECT_EQ(station.get("/files/results/r/notes.txt").text, "kept\n");
+  // A report's zoom page reads its pyramids' descriptors and tiles from here.
+  for (const auto& [name, type] : {std::pair{"normal.dzi", "application/xml"},
+                                   {"normal_files/0/0_0.jpg", "image/jpeg"},
+                                   {"zoom.js", "text/javascript; charset=utf-8"},
+                                   {"report.html", "text/html; charset=utf-8"}}) {
+    fs::create_directories((result / name).parent_path());
+    std::ofstream(result / name) << "x";
+    EXPECT_EQ(station.get(std::string("/files/results/r/") + name).content_type, type) << name;
+  }
   for (const char* path :
        {"/files/stacks/../audit.log", "/files/stacks/%2e%2e/audit.log", "/files/results/r/../../audit.log",
         "/files/results/r/.bands-1.spill", "/files/results/../.station/dome/1-object/domed.log",

@@ -47,7 +47,12 @@ nlohmann::json parse_body(const httplib::Request& request) {
 const char* content_type(const fs::path& file) {
   static const std::map<std::string, const char*> types = {{".html", "text/html; charset=utf-8"},
                                                            {".json", "application/json"},
+                                                           {".js", "text/javascript; charset=utf-8"},
                                                            {".png", "image/png"},
+                                                           {".jpg", "image/jpeg"},
+                                                           {".jpeg", "image/jpeg"},
+                                                           {".dzi", "application/xml"},
+                                                           {".xml", "application/xml"},
                                                            {".svg", "image/svg+xml"},
                                                            {".txt", "text/plain; charset=utf-8"},
                                                            {".lp", "text/plain; charset=utf-8"},
