@@ -39,6 +39,7 @@ void load_pixel(const Observations& observations, std::size_t pixel, bool drop_s
     out.values = out.values.cwiseQuotient(out.near_gains);
   } else {
     out.lights = observations.lights;
+    out.near_gains.resize(0);
   }
   out.usable.assign(static_cast<std::size_t>(images), 1);
   const bool flags = observations.saturated.size() != 0;

@@ -83,15 +83,10 @@ constexpr double kMadToSigma = 1.4826;
 // ... the values T_low dropped join when their median standardised residual
 // is within this many of the selection's σ.
 constexpr double kExpandRatio = 3;
-// ... predictions below this share of the selection's median value count as
-// it in the noise model (dark values are no more certain than this).
-constexpr double kNoiseFloorShare = 0.3;
-// ... σ grows at most as shot noise does (√signal): a steeper growth measured
-// on one pixel's few values is mostly a lobe leaking into the selection.
-constexpr double kMaxNoisePower = 0.5;
-// ... too few values per half, or halves this close in signal: constant σ.
-constexpr std::size_t kMinHalf = 4;
-constexpr double kMinSignalRatio = 1.2;
+// ... the noise model's floor: predictions below this share of the selection's
+// median count as it (dark values are no more certain than this: read noise,
+// quantisation, the penumbrae a threshold lets through).
+constexpr double kNoiseFloorShare = 0.1;
 
 // Usable and above the shadow threshold: what every step may fit.
 bool is_lit(const PixelObservations& pixel, Eigen::Index j, const RobustOptions& options) {
@@ -186,47 +181,25 @@ bool ransac(const PixelObservations& pixel, const RobustOptions& options, std::s
   return true;
 }
 
-// How the pixel's noise grows with its signal, σ ∝ prediction^power: from
-// the fit's residuals on the darker and the brighter half of the selection
-// (ordered by prediction), power = log(residual ratio) / log(prediction
-// ratio), in [0, kMaxNoisePower]. Shot noise gives 1/2; a light model that
-// is off at grazing light (near lights on an assumed plane) gives 0.
-double noise_power(const PixelObservations& pixel, const Eigen::Vector3d& s, double floor,
-                   RobustWorkspace& ws) {
-  auto& pairs = ws.predicted_residuals;
-  pairs.clear();
-  for (const Eigen::Index j : ws.kept) {
-    const double predicted = pixel.lights.row(j).dot(s);
-    pairs.emplace_back(std::max(predicted, floor), std::abs(predicted - pixel.values(j)));
-  }
-  const std::size_t half = pairs.size() / 2;
-  if (half < kMinHalf) return 0;
-  std::sort(pairs.begin(), pairs.end());
-  auto half_median = [&](bool bright, bool residual) {
-    ws.scratch.clear();
-    for (std::size_t i = bright ? half : 0; i < (bright ? pairs.size() : half); ++i)
-      ws.scratch.push_back(residual ? pairs[i].second : pairs[i].first);
-    return median_in_place(ws.scratch);
-  };
-  const double signal_ratio = half_median(true, false) / half_median(false, false);
-  const double noise_ratio = half_median(true, true) / half_median(false, true);
-  if (!(signal_ratio > kMinSignalRatio && noise_ratio > 0 && std::isfinite(noise_ratio))) return 0;
-  return std::clamp(std::log(noise_ratio) / std::log(signal_ratio), 0.0, kMaxNoisePower);
-}
-
 // The estimator found the outliers; least squares is the efficient fit to
 // the rest. Every observation the robust fit explains to within
 // inlier_sigmas noise deviations (σ from the selection's residuals, scaled by
-// noise_power) is refitted by weighted least squares (weights 1/σ²). The
+// the noise model) is refitted by weighted least squares (weights 1/σ²). The
 // values T_low dropped join when the fit explains them about as well as the
 // selection (a Lambertian pixel: twice the data); where they stray (a broad
 // lobe), only the selection is refitted.
+//
+// The noise model: with distant lights σ grows as shot noise does, as the
+// square root of the predicted value (above the floor). With near lights the
+// surface point is a guess (a plane), so the light directions are off most at
+// grazing light, where values are darkest: that error does not shrink with
+// the signal, and σ is constant.
 void refit_inliers(const PixelObservations& pixel, const RobustOptions& options, double scale,
                    RobustWorkspace& ws, Eigen::Vector3d& s) {
   const double floor = kNoiseFloorShare * scale;
-  const double power = noise_power(pixel, s, floor, ws);
+  const bool shot_noise = !pixel.near_lights();
   auto deviation = [&](Eigen::Index j) {  // relative to the scale's
-    return std::pow(std::max(pixel.lights.row(j).dot(s), floor) / scale, power);
+    return shot_noise ? std::sqrt(std::max(pixel.lights.row(j).dot(s), floor) / scale) : 1.0;
   };
   auto standardised = [&](Eigen::Index j) {
     return std::abs(pixel.lights.row(j).dot(s) - pixel.values(j)) / deviation(j);

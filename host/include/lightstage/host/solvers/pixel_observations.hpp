@@ -20,9 +20,10 @@ struct PixelObservations {
   Eigen::MatrixX3d lights;           // images × 3, unit, object -> light
   Eigen::VectorXd values;            // images, linear value at unit light
   std::vector<std::uint8_t> usable;  // images, 1 = finite and (unless kept) not saturated
-  Eigen::VectorXd near_gains;        // images, the near lights' falloff the values were divided by
+  Eigen::VectorXd near_gains;  // images, the near lights' falloff the values were divided by; empty: distant
 
   Eigen::Index count() const { return values.size(); }
+  bool near_lights() const { return near_gains.size() > 0; }
 };
 
 // Fills `out` for row `pixel` of `observations`. When `drop_saturated`,

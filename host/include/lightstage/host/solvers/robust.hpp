@@ -84,7 +84,6 @@ struct RobustWorkspace {
   std::vector<Eigen::Index> kept, inliers;
   Eigen::VectorXd weights;
   std::vector<double> scratch;
-  std::vector<std::pair<double, double>> predicted_residuals;
   std::vector<std::uint8_t> in_selection;
 };
 
