@@ -154,7 +154,7 @@ TEST(GeneralReflectanceCliSweep, BenchMaterialsPrintsTheTableAndPlot) {
 // 0.15): robust 1.32 / 1.30 / 1.39, monotonic 1.06 / 1.22 / 1.55,
 // biquadratic 0.59 / 0.86 / 1.52, auto 0.50 / 0.79 / 1.39. Each beats l2 at
 // every level and robust at the first two; at λ = 0.15 robust's shot-noise
-// refit (docs/solvers.md) draws level with auto and ahead of the other two,
+// refit (docs/solvers.md) draws level with auto and pulls ahead of the other two,
 // so against robust the test holds the issue's measure, the mean over the levels.
 TEST(GeneralReflectanceCliSweep, IssueTargetsHoldOnTheDefaultSweep) {
   LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("GeneralReflectanceCliSweep.BenchMaterialsPrintsTheTableAndPlot");

@@ -18,6 +18,7 @@
 
 #include <fstream>
 #include <thread>
+#include <utility>
 
 namespace lightstage::station {
 namespace {
@@ -322,7 +323,7 @@ TEST(StationApi, FilesStayInTheirFoldersAndActionsComeFromThePageOnLoopback) {
   std::ofstream(result / "notes.txt") << "kept\n";
   std::ofstream(result / ".bands-1.spill") << "not served\n";
   EXPECT_EQ(station.get("/files/results/r/notes.txt").text, "kept\n");
-  // A report's zoom page reads its pyramids' descriptors and tiles from here.
+  // Deep Zoom descriptors, JPEG tiles and scripts get their types, for any viewer reading them from here.
   for (const auto& [name, type] : {std::pair{"normal.dzi", "application/xml"},
                                    {"normal_files/0/0_0.jpg", "image/jpeg"},
                                    {"zoom.js", "text/javascript; charset=utf-8"},

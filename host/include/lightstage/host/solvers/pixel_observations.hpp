@@ -3,8 +3,9 @@
 // it: its own light matrix and its values at unit light. With distant lights
 // every pixel gets Observations::lights; with near lights (LED positions
 // known) each pixel gets its own directions, and its values are divided by
-// the inverse-square gain (near_lights.hpp), so cores never need to know
-// which light model produced them.
+// the inverse-square gain (near_lights.hpp), so cores need not know which
+// light model produced them; near_lights() says so where the noise differs
+// (robust's refit).
 
 #include "lightstage/host/radiometry.hpp"
 

@@ -21,8 +21,10 @@
 //       not depend on the thread count;
 //     - none: least squares on the selection;
 //  5. inlier refit (inlier_sigmas > 0, default 3): the estimator's fit
-//     measures the pixel's noise (σ from its residuals, growing with the
-//     signal up to shot noise's √); every lit value within inlier_sigmas σ
+//     measures the pixel's noise (σ from its residuals; with distant lights
+//     growing as the square root of the predicted value, as shot noise does,
+//     above a tenth of the selection's median; with near lights, whose surface
+//     point is a guess, constant); every lit value within inlier_sigmas σ
 //     of the fit — T_low's dropped values too, when the fit explains them
 //     about as well as the selection — is refitted by weighted least squares.
 // The screen is off by default: with the shadow threshold estimated from the
@@ -39,7 +41,6 @@
 
 #include <cstdint>
 #include <string>
-#include <utility>
 #include <vector>
 
 namespace lightstage {
