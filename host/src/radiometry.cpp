@@ -3,6 +3,7 @@
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/huge_pages.hpp"
 #include "lightstage/common/parallel.hpp"
+#include "lightstage/common/select_kth.hpp"
 
 #include <algorithm>
 #include <array>
@@ -125,9 +126,8 @@ Eigen::RowVector3f pixel_chroma(const float* rgb, const bool* saturated, std::si
   Eigen::RowVector3d chroma;
   for (int c = 0; c < 3; ++c) {
     auto& r = ratios[c];
-    const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
-    std::nth_element(r.begin(), mid, r.end());
-    chroma[c] = std::max(0.0f, *mid);
+    const auto size = static_cast<std::ptrdiff_t>(r.size());
+    chroma[c] = std::max(0.0f, select_kth(r.data(), size, size / 2));
   }
   const double chroma_grey = kRed * chroma[0] + kGreen * chroma[1] + kBlue * chroma[2];
   if (!(chroma_grey > 0)) return Eigen::RowVector3f::Ones();
