@@ -1,6 +1,7 @@
 #include "lightstage/host/solvers/robust.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/select_kth.hpp"
 #include "solvers/lambert_fit.hpp"
 #include "solvers/pixel_driver.hpp"
 
@@ -95,9 +96,8 @@ bool is_lit(const PixelObservations& pixel, Eigen::Index j, const RobustOptions&
 
 // The median of `values` (reordered; not empty).
 double median_in_place(std::vector<double>& values) {
-  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), mid, values.end());
-  return *mid;
+  const auto size = static_cast<std::ptrdiff_t>(values.size());
+  return select_kth(values.data(), size, size / 2);
 }
 
 double median_of(const PixelObservations& pixel, const std::vector<Eigen::Index>& kept,
