@@ -10,7 +10,10 @@ find_package(PkgConfig)
 if(LIGHTSTAGE_CONTROLLER_ONLY)
   set(LIGHTSTAGE_OPENCV_COMPONENTS core)
 else()
-  set(LIGHTSTAGE_OPENCV_COMPONENTS photo imgcodecs imgproc core)  # in link order
+  # Not imgcodecs (tests/CMakeLists.txt finds it for the tests that make or
+  # check image files): it loads some 80 more libraries through GDAL, so the
+  # programs read and write images with libpng, libjpeg, libtiff and OpenEXR.
+  set(LIGHTSTAGE_OPENCV_COMPONENTS photo imgproc core)  # in link order
 endif()
 find_package(OpenCVModules REQUIRED COMPONENTS ${LIGHTSTAGE_OPENCV_COMPONENTS})
 if(NOT LIGHTSTAGE_CONTROLLER_ONLY)
@@ -22,6 +25,8 @@ if(NOT LIGHTSTAGE_CONTROLLER_ONLY)
   find_package(TIFF 4.5 REQUIRED)
   # PNG rows a band at a time (io/row_reader.hpp): libpng itself, not OpenCV's whole-image decoder.
   find_package(PNG 1.6 REQUIRED)
+  # Camera JPEGs and JPEG tiles, planes: libjpeg-turbo (its BGR colour space).
+  find_package(JPEG 62 REQUIRED)
   pkg_check_modules(LIBRAW REQUIRED IMPORTED_TARGET libraw_r>=0.20)
   # Its pkg-config file adds -I.../libraw and -fopenmp to every compile of the
   # library that links it; <libraw/libraw.h> needs neither.

@@ -66,7 +66,7 @@ set(pc_dir ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
 file(RELATIVE_PATH pc_to_prefix /prefix/${pc_dir} /prefix)
 set(pc_requires eigen3 fmt spdlog yaml-cpp protobuf zlib)
 if(LIGHTSTAGE_CONFIG_HOST)
-  list(APPEND pc_requires nlohmann_json OpenEXR libpng16 libtiff-4 "libraw_r >= 0.20" "exiv2 >= 0.27.4"
+  list(APPEND pc_requires nlohmann_json OpenEXR libpng16 libjpeg libtiff-4 "libraw_r >= 0.20" "exiv2 >= 0.27.4"
        "cpp-httplib >= 0.11")
 endif()
 foreach(backend GPIOD LIBCAMERA ARAVIS GPHOTO2 LIBUSB)

@@ -21,7 +21,7 @@ packages=(
   lld ccache  # faster links; compiles reused between builds and clones (scripts/build.sh)
   libeigen3-dev
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-photo-dev
-  libopenexr-dev libraw-dev libpng-dev libtiff-dev libexiv2-dev
+  libopenexr-dev libraw-dev libpng-dev libjpeg62-turbo-dev libtiff-dev libexiv2-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libcpp-httplib-dev  # the operator's station's HTTP server (lightstage serve)
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -1,12 +1,16 @@
 // Camera files come from cameras, tethering programs and raw converters: any
 // bytes must give an image (or EXIF) or an InputError. The first byte picks
 // the reader: RAW through LibRaw at half size or fully demosaiced
-// (io/raw_image.hpp), TIFF through libtiff (io/tiff_image.hpp), or the EXIF
-// through exiv2 (io/exif.hpp); the rest is the file, written under the name
-// the reader dispatches on. Seeds (corpus/camera_file): that byte and the DNGs
-// (sim/dng_writer.hpp) and TIFFs that test_host_camera_files writes.
+// (io/raw_image.hpp), TIFF through libtiff (io/tiff_image.hpp), the EXIF
+// through exiv2 (io/exif.hpp), or JPEG through libjpeg (io/jpeg_image.hpp, as
+// read_image reads it); the rest is the file, written under the name the
+// reader dispatches on. Seeds (corpus/camera_file): that byte and the DNGs
+// (sim/dng_writer.hpp) and TIFFs that test_host_camera_files writes, and
+// baseline, progressive and grey JPEGs.
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/exif.hpp"
+#include "lightstage/host/io/image_io.hpp"
+#include "lightstage/host/io/jpeg_image.hpp"
 #include "lightstage/host/io/raw_image.hpp"
 #include "lightstage/host/io/tiff_image.hpp"
 
@@ -33,8 +37,8 @@ std::filesystem::path scratch(const char* extension) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
   namespace io = lightstage::io;
-  const int kind = data[0] % 4;
-  const std::filesystem::path path = scratch(kind == 2 ? ".tif" : kind == 3 ? ".jpg" : ".dng");
+  const int kind = data[0] % 5;
+  const std::filesystem::path path = scratch(kind == 2 ? ".tif" : kind >= 3 ? ".jpg" : ".dng");
   {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(data + 1), static_cast<std::streamsize>(size - 1));
@@ -58,9 +62,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         if (image.size() != declared) __builtin_trap();
         break;
       }
+      case 4: {
+        const cv::Size declared = io::read_jpeg_size(path);
+        if (declared.area() > kMaxFuzzedPixels) break;
+        const cv::Mat image = io::read_image(path);
+        if (image.size() != declared || image.depth() != CV_8U) __builtin_trap();
+        break;
+      }
       default: {
         const io::ExifInfo exif = io::read_exif(path);
         (void)exif.to_json().dump();
+        if (exif.orientation && (*exif.orientation < 1 || *exif.orientation > 8)) __builtin_trap();
         // The time a stills camera's shot is matched by: a second's worth of steps at most.
         if (const auto time = io::taken_time(exif);
             time && (time->resolution_ns < 1 || time->resolution_ns > 1'000'000'000))

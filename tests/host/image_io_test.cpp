@@ -9,6 +9,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <fstream>
+#include <string>
+#include <vector>
 
 namespace lightstage {
 namespace {
@@ -74,6 +76,28 @@ TEST(HostImageIo, AlphaChannelIsDropped) {
   const cv::Mat back = io::read_image(dir / "alpha.png");
   ASSERT_EQ(back.type(), CV_16UC3);
   EXPECT_EQ(back.at<cv::Vec3w>(2, 2), cv::Vec3w(1000, 2000, 3000));
+}
+
+// What the report, the station and Deep Zoom tiles embed: the PNG OpenCV decodes to the same pixels.
+TEST(HostImageIo, PngEncodedInMemoryDecodesToTheSamePixels) {
+  for (const int type : {CV_8UC1, CV_8UC3, CV_8UC4, CV_16UC1, CV_16UC3, CV_16UC4}) {
+    SCOPED_TRACE(type);
+    const cv::Mat image = ramp(type, 13, 21);
+    const std::string png = io::encode_png(image);
+    const cv::Mat back =
+        cv::imdecode(std::vector<std::uint8_t>(png.begin(), png.end()), cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(back.type(), type);
+    EXPECT_EQ(cv::norm(back, image, cv::NORM_INF), 0);
+  }
+  const cv::Mat whole = ramp(CV_8UC3, 20, 30);
+  const cv::Mat part = whole(cv::Rect(3, 4, 11, 9));  // rows that are not contiguous
+  const std::string png = io::encode_png(part);
+  EXPECT_EQ(cv::norm(cv::imdecode(std::vector<std::uint8_t>(png.begin(), png.end()), cv::IMREAD_UNCHANGED),
+                     part, cv::NORM_INF),
+            0);
+  EXPECT_THAT(error_of([&] { (void)io::encode_png(cv::Mat(3, 3, CV_32FC1, 0.5), "tile 3"); }),
+              HasSubstr("tile 3: cannot write as PNG"));
+  EXPECT_THAT(error_of([&] { (void)io::encode_png(cv::Mat(), "tile 4"); }), HasSubstr("tile 4"));
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include "lightstage/common/log.hpp"
 #include "lightstage/host/calibration/lp_file.hpp"
 #include "lightstage/host/io/exif.hpp"
+#include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/output_folder.hpp"
 #include "lightstage/host/io/relight_web.hpp"
 #include "lightstage/host/io/rti_files.hpp"
@@ -21,7 +22,6 @@
 #include <Eigen/Dense>
 
 #include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -256,21 +256,17 @@ std::string format_holdout_table(const nlohmann::json& r) {
 namespace {
 
 // One photograph as decoded: RAW through io/raw_image.hpp (its decode noted in
-// `extra`), TIFF as stored (io/tiff_image.hpp), JPEG and PNG through OpenCV,
-// which turns them upright by their EXIF orientation.
-cv::Mat read_photo(const std::filesystem::path& file, io::RawDemosaic demosaic, nlohmann::json& extra) {
+// `extra`), TIFF as stored (io/tiff_image.hpp), JPEG and PNG (io/image_io.hpp)
+// turned upright by their EXIF orientation, as a viewer shows them.
+cv::Mat read_photo(const std::filesystem::path& file, io::RawDemosaic demosaic, const io::ExifInfo& exif,
+                   nlohmann::json& extra) {
   if (io::is_raw_file(file)) {
     io::RawImage decoded = io::read_raw(file, demosaic);
     extra["raw"] = decoded.describe();
     return std::move(decoded.image);
   }
   if (io::is_tiff_file(file)) return io::read_tiff(file);
-  cv::Mat photo = cv::imread(file.string(), cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
-  if (photo.empty()) fail("{}: not an image OpenCV can read (JPEG, PNG)", file.string());
-  if (photo.channels() == 4) cv::cvtColor(photo, photo, cv::COLOR_BGRA2BGR);
-  if (photo.channels() != 1 && photo.channels() != 3)
-    fail("{}: channels: {} (1 or 3 expected)", file.string(), photo.channels());
-  return photo;
+  return io::turn_upright(io::read_image(file), exif.orientation.value_or(1));
 }
 
 std::filesystem::path find_lp(const ImportSettings& s) {
@@ -306,20 +302,21 @@ nlohmann::json import_rti(const ImportSettings& s) {
     if (!std::filesystem::is_regular_file(file))
       fail("{}: image: {} is not in {}", where, name, s.input.string());
     nlohmann::json extra = {{"source_image", name}};
-    const cv::Mat photo = read_photo(file, s.raw_demosaic, extra);
+    io::ExifInfo exif;
+    try {
+      exif = io::read_exif(file);
+    } catch (const InputError& e) {
+      // A damaged EXIF block costs the metadata (and the orientation), not the frame.
+      logger("host")->warn("{}", e.what());
+    }
+    const cv::Mat photo = read_photo(file, s.raw_demosaic, exif, extra);
     if (extra.contains("raw"))
       ++raw_files;
     else
       (photo.depth() == CV_8U ? eight_bit : sixteen_bit) += 1;
     Frame frame;
-    try {
-      const io::ExifInfo exif = io::read_exif(file);
-      if (!exif.empty()) extra["exif"] = exif.to_json();
-      if (exif.exposure_s) frame.exposure_us = *exif.exposure_s * 1e6;
-    } catch (const InputError& e) {
-      // The pixels decoded: a damaged EXIF block costs the metadata, not the frame.
-      logger("host")->warn("{}", e.what());
-    }
+    if (!exif.empty()) extra["exif"] = exif.to_json();
+    if (exif.exposure_s) frame.exposure_us = *exif.exposure_s * 1e6;
     frame.image = io::linear_frame(photo, response, file.string());
     frame.filename = fmt::format("{:03d}.png", i + 1);
     frame.light_direction = entries[i].direction.normalized();

@@ -112,6 +112,38 @@ nlohmann::json ExifInfo::to_json() const {
   return out;
 }
 
+cv::Mat turn_upright(const cv::Mat& image, int orientation) {
+  cv::Mat out;
+  switch (orientation) {
+    case 2:
+      cv::flip(image, out, 1);
+      return out;  // mirrored left to right
+    case 3:
+      cv::flip(image, out, -1);
+      return out;  // turned 180 degrees
+    case 4:
+      cv::flip(image, out, 0);
+      return out;  // mirrored top to bottom
+    case 5:
+      cv::transpose(image, out);
+      return out;
+    case 6:  // turned 90 degrees clockwise to be upright
+      cv::transpose(image, out);
+      cv::flip(out, out, 1);
+      return out;
+    case 7:
+      cv::transpose(image, out);
+      cv::flip(out, out, -1);
+      return out;
+    case 8:  // turned 90 degrees anticlockwise to be upright
+      cv::transpose(image, out);
+      cv::flip(out, out, 0);
+      return out;
+    default:
+      return image;
+  }
+}
+
 ExifInfo read_exif(const std::filesystem::path& path) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) fail("{}: no such file", path.string());
@@ -127,6 +159,10 @@ ExifInfo read_exif(const std::filesystem::path& path) {
     info.iso = positive_number(exif, "Exif.Photo.ISOSpeedRatings");
     info.f_number = positive_number(exif, "Exif.Photo.FNumber");
     info.taken = taken(exif);
+    if (const Exiv2::Exifdatum* datum = find(exif, "Exif.Image.Orientation")) {
+      const long value = datum->toLong();
+      if (value >= 1 && value <= 8) info.orientation = static_cast<int>(value);
+    }
   } catch (const std::exception& e) {
     fail("{}: cannot read its EXIF ({})", path.string(), e.what());
   }

@@ -42,7 +42,21 @@ ImageHeader png_header(const std::filesystem::path& path, const std::string& byt
   return header;
 }
 
+bool has_png_signature(const std::string& bytes) {
+  return bytes.size() >= kPngSignature.size() &&
+         std::equal(kPngSignature.begin(), kPngSignature.end(), bytes.begin(),
+                    [](unsigned char a, char b) { return a == static_cast<unsigned char>(b); });
+}
+
 }  // namespace
+
+bool is_png_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes(kPngSignature.size(), '\0');
+  in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  bytes.resize(static_cast<std::size_t>(in.gcount()));
+  return has_png_signature(bytes);
+}
 
 ImageHeader read_image_header(const std::filesystem::path& path) {
   std::error_code error;
@@ -62,11 +76,7 @@ ImageHeader read_image_header(const std::filesystem::path& path) {
     const cv::Size size = is_raw_file(path) ? read_raw_size(path) : read_tiff_size(path);
     return {size.width, size.height};
   }
-  if (bytes.size() >= kPngSignature.size() &&
-      std::equal(kPngSignature.begin(), kPngSignature.end(), bytes.begin(),
-                 [](unsigned char a, char b) { return a == static_cast<unsigned char>(b); })) {
-    return png_header(path, bytes);
-  }
+  if (has_png_signature(bytes)) return png_header(path, bytes);
   fail("{}: not a readable image (stack images are PNG, PFM, TIFF or camera RAW)", path.string());
 }
 

@@ -21,4 +21,7 @@ struct ImageHeader {
 // its header is truncated or malformed.
 ImageHeader read_image_header(const std::filesystem::path& path);
 
+// By content: the PNG signature, whatever the name (false for a file that cannot be read).
+bool is_png_file(const std::filesystem::path& path);
+
 }  // namespace lightstage::io

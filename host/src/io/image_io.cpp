@@ -1,21 +1,16 @@
 #include "lightstage/host/io/image_io.hpp"
 
 #include "io/file_extension.hpp"
+#include "io/image_header.hpp"
+#include "io/row_readers.hpp"
 #include "lightstage/common/error.hpp"
+#include "lightstage/host/io/jpeg_image.hpp"
 #include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/io/raw_image.hpp"
 #include "lightstage/host/io/row_writer.hpp"
 #include "lightstage/host/io/tiff_image.hpp"
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
-#include <algorithm>
-#include <cctype>
-#include <cstdint>
-#include <string_view>
 #include <system_error>
-#include <vector>
 
 namespace lightstage::io {
 namespace {
@@ -34,34 +29,9 @@ cv::Mat read_image(const std::filesystem::path& path) {
   if (lower_extension(path) == ".pfm") return read_pfm(path);
   if (is_raw_file(path)) return read_raw(path).image;
   if (is_tiff_file(path)) return read_tiff(path);
-
-  cv::Mat image;
-  try {
-    image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception& e) {
-    fail("{}: cannot decode image: {}", path.string(), e.what());
-  }
-  if (image.empty()) fail("{}: not a readable image (unknown format or corrupt file)", path.string());
-  if (image.depth() != CV_8U && image.depth() != CV_16U) {
-    fail("{}: unsupported pixel type ({}); expected 8- or 16-bit", path.string(), describe_type(image));
-  }
-  switch (image.channels()) {
-    case 1:
-    case 3:
-      return image;
-    case 2: {
-      cv::Mat grey;
-      cv::extractChannel(image, grey, 0);
-      return grey;
-    }
-    case 4: {
-      cv::Mat bgr;
-      cv::cvtColor(image, bgr, cv::COLOR_BGRA2BGR);
-      return bgr;
-    }
-    default:
-      fail("{}: unsupported channel count {}", path.string(), image.channels());
-  }
+  if (is_png_file(path)) return read_png(path);
+  if (is_jpeg_file(path)) return read_jpeg(path);
+  fail("{}: not a readable image (PNG, JPEG, TIFF, PFM or camera RAW expected)", path.string());
 }
 
 void write_png(const std::filesystem::path& path, const cv::Mat& image) {

@@ -1,7 +1,8 @@
-// PNG rows through libpng, transformed as OpenCV's imread(IMREAD_UNCHANGED)
-// and read_image transform them: 1-, 2- and 4-bit grey widened to 8 bits,
-// palettes expanded to RGB, grey with alpha made RGB, alpha dropped, colour
-// in BGR order, 16-bit samples in the machine's byte order.
+// PNG through libpng, a band of rows at a time or (read_png) the whole image,
+// transformed as OpenCV's imread(IMREAD_UNCHANGED) and read_image did before
+// (so the pixels are the same): 1-, 2- and 4-bit grey widened to 8 bits,
+// palettes expanded to RGB, grey with alpha made RGB, alpha dropped, colour in
+// BGR order, 16-bit samples in the machine's byte order.
 #include "io/row_readers.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/stack_io.hpp"
@@ -35,7 +36,7 @@ struct PngLayout {
   png_uint_32 width = 0, height = 0;
   int channels = 1;  // after the transforms: 1 (grey) or 3 (BGR)
   int bit_depth = 8;
-  bool interlaced = false;
+  bool interlaced = false;    // then libpng hands out rows only whole-image (png_read_image)
   std::size_t row_bytes = 0;  // as libpng delivers a transformed row
 };
 
@@ -55,6 +56,7 @@ bool read_png_header(png_structp png, png_infop info, std::FILE* file, PngLayout
   png_set_strip_alpha(png);
   if (layout->channels == 3) png_set_bgr(png);
   if (bit_depth == 16 && std::endian::native == std::endian::little) png_set_swap(png);
+  png_set_interlace_handling(png);
   png_read_update_info(png, info);
   layout->row_bytes = png_get_rowbytes(png, info);
   return true;
@@ -63,6 +65,12 @@ bool read_png_header(png_structp png, png_infop info, std::FILE* file, PngLayout
 bool read_png_rows(png_structp png, png_bytep* rows, int count) {
   if (setjmp(png_jmpbuf(png))) return false;
   for (int i = 0; i < count; ++i) png_read_row(png, rows[i], nullptr);
+  return true;
+}
+
+bool read_png_image(png_structp png, png_bytep* rows) {
+  if (setjmp(png_jmpbuf(png))) return false;
+  png_read_image(png, rows);
   return true;
 }
 
@@ -112,11 +120,21 @@ class PngFile {
       fail("{}: cannot decode rows {} to {} ({})", path_.string(), next_row_, next_row_ + count - 1,
            error_.text);
     next_row_ += count;
-    if (next_row_ == static_cast<int>(layout_.height) && !read_png_end(png_))
-      fail("{}: cannot decode the end of the file ({})", path_.string(), error_.text);
+    if (next_row_ == static_cast<int>(layout_.height)) read_end();
+  }
+
+  // Every row at once, interlaced or not.
+  void read_whole(std::vector<png_bytep>& rows) {
+    if (!read_png_image(png_, rows.data())) fail("{}: cannot decode ({})", path_.string(), error_.text);
+    next_row_ = static_cast<int>(layout_.height);
+    read_end();
   }
 
  private:
+  void read_end() {
+    if (!read_png_end(png_)) fail("{}: cannot decode the end of the file ({})", path_.string(), error_.text);
+  }
+
   void close() {
     if (png_ != nullptr) png_destroy_read_struct(&png_, info_ != nullptr ? &info_ : nullptr, nullptr);
     if (file_ != nullptr) std::fclose(file_);
@@ -164,6 +182,17 @@ class PngRows final : public RowReader {
 };
 
 }  // namespace
+
+cv::Mat read_png(const std::filesystem::path& path) {
+  PngFile file(path);
+  const PngLayout& layout = file.layout();
+  cv::Mat image(static_cast<int>(layout.height), static_cast<int>(layout.width),
+                CV_MAKETYPE(layout.bit_depth == 16 ? CV_16U : CV_8U, layout.channels));
+  std::vector<png_bytep> rows(static_cast<std::size_t>(image.rows));
+  for (int y = 0; y < image.rows; ++y) rows[static_cast<std::size_t>(y)] = image.ptr<png_byte>(y);
+  file.read_whole(rows);
+  return image;
+}
 
 std::unique_ptr<RowReader> open_png_rows(const std::filesystem::path& path) {
   auto file = std::make_unique<PngFile>(path);

@@ -2,10 +2,11 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/image_io.hpp"
+#include "lightstage/host/io/jpeg_image.hpp"
 #include "lightstage/host/io/output_folder.hpp"
 
 #include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <array>
@@ -111,8 +112,8 @@ nlohmann::json write_relight_web(const std::filesystem::path& dir, const RtiImag
     const std::filesystem::path file = dir / name;
     if (options.image_format == "png")
       write_png(file, out);
-    else if (!cv::imwrite(file.string(), out, {cv::IMWRITE_JPEG_QUALITY, options.quality}))
-      fail("{}: cannot write", file.string());
+    else
+      write_jpeg(file, out, options.quality);
     files.push_back(name);
   }
   nlohmann::json info = {{"width", image.width},
@@ -216,8 +217,10 @@ RtiImage read_relight_web(const std::filesystem::path& dir) {
     const std::filesystem::path file = dir / plane_name(j, info.format);
     if (!std::filesystem::is_regular_file(file))
       fail("{}: missing (info.json has {} planes)", file.string(), info.nplanes);
-    const cv::Mat img = cv::imread(file.string(), cv::IMREAD_COLOR);
-    if (img.empty()) fail("{}: not an image OpenCV can read", file.string());
+    cv::Mat img = read_image(file);
+    if (img.depth() != CV_8U)
+      fail("{}: {}-bit samples; relight planes are 8-bit", file.string(), img.elemSize1() * 8);
+    if (img.channels() == 1) cv::cvtColor(img, img, cv::COLOR_GRAY2BGR);
     if (img.cols != info.width || img.rows != info.height)
       fail("{}: {}x{}, info.json says {}x{}", file.string(), img.cols, img.rows, info.width, info.height);
     for (int c = 0; c < 3; ++c) {

@@ -10,6 +10,9 @@ namespace lightstage::io {
 
 // libpng; nullptr for an interlaced PNG (its rows come out only at the last pass).
 std::unique_ptr<RowReader> open_png_rows(const std::filesystem::path& path);
+// libpng, every row at once (interlaced too), as open_png_rows transforms them. Throws InputError naming the
+// file.
+cv::Mat read_png(const std::filesystem::path& path);
 // libtiff strips or tiles.
 std::unique_ptr<RowReader> open_tiff_rows(const std::filesystem::path& path);
 // A file that decodes only whole (camera RAW, interlaced PNG), decoded into

@@ -2,11 +2,12 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/parallel.hpp"
+#include "lightstage/host/io/image_io.hpp"
+#include "lightstage/host/io/jpeg_image.hpp"
 #include "report/overview.hpp"
 
 #include <fmt/format.h>
 #include <unistd.h>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -75,22 +76,20 @@ struct DeepZoomWriter::State {
     parallel_for(tile_count(level_size.width), options.threads, [&](int c) {
       const int x0 = std::max(0, c * t - o), x1 = std::min(level_size.width, (c + 1) * t + o);
       const cv::Mat tile = image(cv::Rect(x0, y0 - image_y0, x1 - x0, y1 - y0));
-      std::vector<std::uint8_t> encoded;
       const fs::path file = folder / fmt::format("{}_{}.{}", c, r, options.format);
-      bool ok = false;
+      std::string encoded;
       if (options.format == "png") {
-        ok = cv::imencode(".png", tile, encoded, {cv::IMWRITE_PNG_COMPRESSION, 1});
+        encoded = io::encode_png(tile, file.string());
       } else {
         cv::Mat over_black;
         cv::cvtColor(tile, over_black, cv::COLOR_BGRA2BGR);
         for (int y = 0; y < tile.rows; ++y)
           for (int x = 0; x < tile.cols; ++x)
             over_black.at<cv::Vec3b>(y, x) *= tile.at<cv::Vec4b>(y, x)[3] / 255.0;
-        ok = cv::imencode(".jpg", over_black, encoded, {cv::IMWRITE_JPEG_QUALITY, 90});
+        encoded = io::encode_jpeg(over_black, 90, file.string());
       }
-      if (!ok) fail("{}: the tile could not be encoded", file.string());
       std::ofstream out(file, std::ios::binary);
-      out.write(reinterpret_cast<const char*>(encoded.data()), static_cast<std::streamsize>(encoded.size()));
+      out.write(encoded.data(), static_cast<std::streamsize>(encoded.size()));
       if (!out.flush()) fail("{}: cannot write the tile (disk full or not writable?)", file.string());
       ++tiles;
       bytes += encoded.size();

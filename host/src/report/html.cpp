@@ -1,9 +1,9 @@
 #include "report/html.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/host/io/image_io.hpp"
 
 #include <zlib.h>
-#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -62,20 +62,9 @@ std::string base64(std::span<const std::uint8_t> bytes) {
   return out;
 }
 
-std::vector<std::uint8_t> encode_png(const cv::Mat& image) {
-  const int depth = image.depth();
-  const int channels = image.channels();
-  if ((depth != CV_8U && depth != CV_16U) || (channels != 1 && channels != 3 && channels != 4) ||
-      image.empty())
-    fail("report: cannot encode a {}x{} image of type {} as PNG", image.cols, image.rows, image.type());
-  std::vector<std::uint8_t> bytes;
-  if (!cv::imencode(".png", image, bytes))
-    fail("report: PNG encoding of a {}x{} image failed", image.cols, image.rows);
-  return bytes;
-}
-
 std::string png_data_uri(const cv::Mat& image) {
-  return "data:image/png;base64," + base64(encode_png(image));
+  const std::string png = io::encode_png(image, "report");
+  return "data:image/png;base64," + base64({reinterpret_cast<const std::uint8_t*>(png.data()), png.size()});
 }
 
 std::vector<std::uint8_t> zlib_compress(std::span<const std::uint8_t> bytes) {

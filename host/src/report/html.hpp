@@ -18,10 +18,7 @@ std::string escape_html(std::string_view text);
 // Standard base64 (RFC 4648, with padding).
 std::string base64(std::span<const std::uint8_t> bytes);
 
-// PNG bytes of an 8- or 16-bit, 1/3/4-channel image (BGR/BGRA in memory).
-std::vector<std::uint8_t> encode_png(const cv::Mat& image);
-
-// "data:image/png;base64,..." of encode_png(image).
+// "data:image/png;base64,..." of io::encode_png(image): 8- or 16-bit, 1, 3 or 4 channels (BGR/BGRA).
 std::string png_data_uri(const cv::Mat& image);
 
 // zlib stream (RFC 1950), what the browser's DecompressionStream("deflate") reads.

@@ -1,8 +1,8 @@
 #include "lightstage/station/preview_figures.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/host/io/image_io.hpp"
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <vector>
@@ -42,9 +42,7 @@ cv::Mat grey_share(const cv::Mat& frame) {
 std::string encode_preview_png(const cv::Mat& frame) {
   cv::Mat eight;
   frame.convertTo(eight, CV_8U, 255.0 / full_scale(frame));
-  std::vector<unsigned char> bytes;
-  if (!cv::imencode(".png", eight, bytes)) throw Error("preview: the frame could not be encoded as PNG");
-  return {bytes.begin(), bytes.end()};
+  return io::encode_png(eight, "preview");
 }
 
 nlohmann::json preview_figures(const cv::Mat& frame) {

@@ -4,6 +4,7 @@
 // An import puts it into the stack's manifest (docs/stack-format.md).
 
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
 
 #include <cstdint>
 #include <filesystem>
@@ -20,6 +21,9 @@ struct ExifInfo {
   // DateTimeOriginal (and SubSecTimeOriginal) as "YYYY-MM-DDTHH:MM:SS[.fff]":
   // the camera's clock, which EXIF records without a time zone.
   std::optional<std::string> taken;
+  // Orientation, 1 to 8: how the stored pixels turn upright (1: as stored).
+  // Not in to_json: the frames a stack keeps are already turned.
+  std::optional<int> orientation;
 
   bool empty() const;
   // The fields present, as {"make", "model", "exposure_s", "iso", "f_number", "taken"}.
@@ -33,6 +37,11 @@ struct ExifTime {
   std::int64_t resolution_ns = 0;
 };
 std::optional<ExifTime> taken_time(const ExifInfo& exif);
+
+// `image` as the EXIF `orientation` says it is seen (the transforms of EXIF
+// 2.3's Orientation tag: mirrored, turned by 180 degrees, or transposed and
+// turned by 90); unknown values leave it as stored.
+cv::Mat turn_upright(const cv::Mat& image, int orientation);
 
 // Reads the EXIF of `path`. Fields the file does not hold (or holds malformed:
 // a zero denominator, an unparsable date) stay empty. Throws InputError naming
