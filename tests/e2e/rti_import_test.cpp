@@ -10,7 +10,9 @@
 #include "lightstage/testing/run.hpp"
 
 #include <gtest/gtest.h>
+#include <exiv2/exiv2.hpp>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include <cmath>
@@ -48,9 +50,11 @@ void write_dng_shot(const std::filesystem::path& path, const cv::Mat& linear, st
 }
 
 // Writes the stack's frames as `ext` files named like RTIBuilder's (absolute
-// Windows paths in the .lp), 8-bit ones sRGB-encoded.
-void write_operator_folder(const ImageStack& stack, const std::filesystem::path& dir,
-                           const std::string& ext) {
+// Windows paths in the .lp), 8-bit ones sRGB-encoded. With `turned`, JPEGs as
+// a camera held on its side stores them: turned a quarter anticlockwise, with
+// EXIF Orientation 6 (turn clockwise to view).
+void write_operator_folder(const ImageStack& stack, const std::filesystem::path& dir, const std::string& ext,
+                           bool turned = false) {
   std::filesystem::create_directories(dir);
   std::vector<calibration::LpEntry> lp;
   for (std::size_t i = 0; i < stack.frames.size(); ++i) {
@@ -73,7 +77,14 @@ void write_operator_folder(const ImageStack& stack, const std::filesystem::path&
     } else {
       linear.convertTo(out, CV_16U, 65535.0);
     }
+    if (turned) cv::rotate(out, out, cv::ROTATE_90_COUNTERCLOCKWISE);
     ASSERT_TRUE(cv::imwrite((dir / name).string(), out, {cv::IMWRITE_JPEG_QUALITY, 98}));
+    if (turned) {
+      auto image = Exiv2::ImageFactory::open((dir / name).string());
+      image->readMetadata();
+      image->exifData()["Exif.Image.Orientation"] = std::uint16_t{6};
+      image->writeMetadata();
+    }
   }
   std::ofstream(dir / "assembly-files.lp") << calibration::format_lp(lp);
 }
@@ -133,6 +144,26 @@ TEST_P(ImportRti, ImportsAndSolves) {
 
 INSTANTIATE_TEST_SUITE_P(Formats, ImportRti, ::testing::Values(".jpg", ".tif", ".dng"),
                          [](const auto& p) { return p.param.substr(1); });
+
+// Photographs taken with the camera on its side come in as a viewer shows them.
+TEST(ImportRtiOrientation, JpegsAreTurnedUprightByTheirExif) {
+  const auto dir = testing::scratch_dir();
+  auto run = run_lightstage({"simulate", "--scene", "bumps", "--lights", "distant", "--noise", "none",
+                             "--width", "56", "--height", "40", "--out", (dir / "stack").string()});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const ImageStack stack = io::load_stack(dir / "stack");
+  write_operator_folder(stack, dir / "photos", ".jpg", /*turned=*/true);
+  ASSERT_EQ(
+      cv::imread((dir / "photos/IMG_1000.jpg").string(), cv::IMREAD_UNCHANGED | cv::IMREAD_IGNORE_ORIENTATION)
+          .size(),
+      cv::Size(40, 56));
+  run = run_lightstage({"import", "rti", (dir / "photos").string(), "--out", (dir / "imported").string()});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  ASSERT_EQ(io::load_stack(dir / "imported").frames[0].image.size(), cv::Size(56, 40));
+  run = run_lightstage({"solve", "--input", (dir / "imported").string(), "--out", (dir / "result").string()});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_LT(evaluate_normal_map(dir / "result/normal.png", dir / "stack").mean, 3.0);
+}
 
 TEST(ImportRtiErrors, MissingImageNamesTheLpLine) {
   const auto dir = testing::scratch_dir();
