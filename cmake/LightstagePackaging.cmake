@@ -97,7 +97,7 @@ and a virtual camera that renders a scene under the LEDs that are on.")
 # (cmake/LightstageDependencies.cmake), which its CMake package and
 # pkg-config file find again.
 set(devel_depends libeigen3-dev libyaml-cpp-dev libfmt-dev libspdlog-dev libprotobuf-dev zlib1g-dev
-    nlohmann-json3-dev libopenexr-dev libraw-dev libpng-dev libtiff-dev libexiv2-dev libcpp-httplib-dev)
+    nlohmann-json3-dev libopenexr-dev libraw-dev libpng-dev libjpeg-dev libtiff-dev libexiv2-dev libcpp-httplib-dev)
 foreach(component ${LIGHTSTAGE_OPENCV_COMPONENTS})
   list(APPEND devel_depends libopencv-${component}-dev)
 endforeach()

@@ -149,6 +149,17 @@ TEST(HostJpegImage, BrokenFilesAndImagesItCannotWriteAreRefusedNamingThem) {
               HasSubstr("zero.jpg: JPEG quality 0 (1 to 100)"));
   EXPECT_THAT(error_of([&] { io::write_jpeg(dir / "no" / "folder.jpg", gradient(CV_8UC1), 90); }),
               HasSubstr("folder.jpg"));
+  // A header declaring more than a stack may hold (16384 a side) is refused before any pixel is decoded.
+  std::string huge = io::encode_jpeg(gradient(CV_8UC1), 90);
+  const std::size_t frame =
+      huge.find("\xFF\xC0");  // baseline start of frame: length, precision, height, width
+  ASSERT_NE(frame, std::string::npos);
+  huge[frame + 5] = huge[frame + 7] = '\x4E';  // 0x4E20 = 20000
+  huge[frame + 6] = huge[frame + 8] = '\x20';
+  write_bytes(dir / "huge.jpg", huge);
+  EXPECT_THAT(error_of([&] { io::read_jpeg(dir / "huge.jpg"); }),
+              HasSubstr("huge.jpg: JPEG of 20000x20000 pixels, larger than the 16384 a side this reads"));
+  EXPECT_THAT(error_of([&] { io::read_jpeg_size(dir / "huge.jpg"); }), HasSubstr("huge.jpg"));
   EXPECT_FALSE(std::filesystem::exists(dir / "deep.jpg"));
   EXPECT_FALSE(std::filesystem::exists(dir / "zero.jpg"));
 }

@@ -256,17 +256,15 @@ std::string format_holdout_table(const nlohmann::json& r) {
 namespace {
 
 // One photograph as decoded: RAW through io/raw_image.hpp (its decode noted in
-// `extra`), TIFF as stored (io/tiff_image.hpp), JPEG and PNG (io/image_io.hpp)
-// turned upright by their EXIF orientation, as a viewer shows them.
-cv::Mat read_photo(const std::filesystem::path& file, io::RawDemosaic demosaic, const io::ExifInfo& exif,
-                   nlohmann::json& extra) {
+// `extra`), TIFF as stored (io/tiff_image.hpp), JPEG and PNG (io/image_io.hpp).
+cv::Mat read_photo(const std::filesystem::path& file, io::RawDemosaic demosaic, nlohmann::json& extra) {
   if (io::is_raw_file(file)) {
     io::RawImage decoded = io::read_raw(file, demosaic);
     extra["raw"] = decoded.describe();
     return std::move(decoded.image);
   }
   if (io::is_tiff_file(file)) return io::read_tiff(file);
-  return io::turn_upright(io::read_image(file), exif.orientation.value_or(1));
+  return io::read_image(file);
 }
 
 std::filesystem::path find_lp(const ImportSettings& s) {
@@ -302,14 +300,17 @@ nlohmann::json import_rti(const ImportSettings& s) {
     if (!std::filesystem::is_regular_file(file))
       fail("{}: image: {} is not in {}", where, name, s.input.string());
     nlohmann::json extra = {{"source_image", name}};
+    cv::Mat photo = read_photo(file, s.raw_demosaic, extra);
     io::ExifInfo exif;
     try {
       exif = io::read_exif(file);
     } catch (const InputError& e) {
-      // A damaged EXIF block costs the metadata (and the orientation), not the frame.
+      // The pixels decoded: a damaged EXIF block costs the metadata (and the orientation), not the frame.
       logger("host")->warn("{}", e.what());
     }
-    const cv::Mat photo = read_photo(file, s.raw_demosaic, exif, extra);
+    // JPEG and PNG as a viewer shows them; RAW keeps the sensor's orientation, TIFF is read as stored.
+    if (!extra.contains("raw") && !io::is_tiff_file(file))
+      photo = io::turn_upright(photo, exif.orientation.value_or(1));
     if (extra.contains("raw"))
       ++raw_files;
     else

@@ -9,6 +9,7 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <exception>
 #include <mutex>
 #include <system_error>
@@ -160,7 +161,11 @@ ExifInfo read_exif(const std::filesystem::path& path) {
     info.f_number = positive_number(exif, "Exif.Photo.FNumber");
     info.taken = taken(exif);
     if (const Exiv2::Exifdatum* datum = find(exif, "Exif.Image.Orientation")) {
+#if EXIV2_TEST_VERSION(0, 28, 0)
+      const std::int64_t value = datum->toInt64();  // toLong is gone from 0.28
+#else
       const long value = datum->toLong();
+#endif
       if (value >= 1 && value <= 8) info.orientation = static_cast<int>(value);
     }
   } catch (const std::exception& e) {

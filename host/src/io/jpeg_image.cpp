@@ -1,18 +1,21 @@
 #include "lightstage/host/io/jpeg_image.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/log.hpp"
 #include "lightstage/host/io/stack_io.hpp"
 #include "util/atomic_file.hpp"
 
+#include <cstdio>  // before jpeglib.h, which needs FILE and size_t declared
+
 #include <jerror.h>
 #include <jpeglib.h>
-#include <cstdio>  // jpeglib.h needs FILE and size_t declared first
 
 #include <csetjmp>
-#include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <new>
 #include <string>
+#include <utility>
 #include <vector>
 
 #ifndef JCS_EXTENSIONS
@@ -28,6 +31,7 @@ struct JpegErrors {
   jpeg_error_mgr manager;  // first: libjpeg hands back &manager as the struct's err
   std::jmp_buf jump;
   char text[JMSG_LENGTH_MAX] = {};
+  char first_warning[JMSG_LENGTH_MAX] = {};
 };
 
 [[noreturn]] void on_error(j_common_ptr info) {
@@ -36,10 +40,14 @@ struct JpegErrors {
   std::longjmp(errors->jump, 1);
 }
 
-// Warnings pass silently but one: data that ends before the image does, which
-// libjpeg would pad with grey rows.
+// Data that ends before the image does, which libjpeg would pad with grey
+// rows, is an error; the first other warning (corrupt data libjpeg skipped) is
+// kept to be logged.
 void on_message(j_common_ptr info, int level) {
-  if (level < 0 && info->err->msg_code == JWRN_JPEG_EOF) on_error(info);
+  if (level >= 0) return;  // trace messages
+  if (info->err->msg_code == JWRN_JPEG_EOF) on_error(info);
+  auto* errors = reinterpret_cast<JpegErrors*>(info->err);
+  if (errors->first_warning[0] == '\0') info->err->format_message(info, errors->first_warning);
 }
 
 void route_errors(jpeg_error_mgr* manager) {
@@ -90,15 +98,46 @@ bool read_lines(Decompressor* d, JSAMPARRAY rows) {
   return true;
 }
 
+// The compressed bytes, appended to a string a buffer at a time (libjpeg's
+// own memory destination frees buffers it has outgrown behind its caller's back).
+struct StringDestination {
+  jpeg_destination_mgr manager{};  // first: libjpeg hands back &manager as the struct's dest
+  std::string bytes;
+  bool out_of_memory = false;
+  JOCTET buffer[16384] = {};
+};
+
+StringDestination& destination(j_compress_ptr info) {
+  return *reinterpret_cast<StringDestination*>(info->dest);
+}
+
+void keep(StringDestination& d, std::size_t count) {
+  try {
+    d.bytes.append(reinterpret_cast<const char*>(d.buffer), count);
+  } catch (const std::bad_alloc&) {
+    d.out_of_memory = true;  // no exception may pass through libjpeg
+  }
+  d.manager.next_output_byte = d.buffer;
+  d.manager.free_in_buffer = sizeof d.buffer;
+}
+
+void start_destination(j_compress_ptr info) { keep(destination(info), 0); }
+boolean empty_destination(j_compress_ptr info) {
+  keep(destination(info), sizeof destination(info).buffer);
+  return TRUE;
+}
+void end_destination(j_compress_ptr info) {
+  StringDestination& d = destination(info);
+  keep(d, sizeof d.buffer - d.manager.free_in_buffer);
+}
+
 struct Compressor {
   jpeg_compress_struct info{};
   JpegErrors errors{};
+  StringDestination out;
   bool created = false;
-  unsigned char* buffer = nullptr;  // jpeg_mem_dest's, from malloc
-  unsigned long size = 0;
   ~Compressor() {
     if (created) jpeg_destroy_compress(&info);
-    std::free(buffer);
   }
 };
 
@@ -113,7 +152,10 @@ bool create(Compressor* c) {
 
 bool compress(Compressor* c, const cv::Mat* image, int quality) {
   if (setjmp(c->errors.jump)) return false;
-  jpeg_mem_dest(&c->info, &c->buffer, &c->size);
+  c->out.manager.init_destination = start_destination;
+  c->out.manager.empty_output_buffer = empty_destination;
+  c->out.manager.term_destination = end_destination;
+  c->info.dest = &c->out.manager;
   c->info.image_width = static_cast<JDIMENSION>(image->cols);
   c->info.image_height = static_cast<JDIMENSION>(image->rows);
   c->info.input_components = image->channels();
@@ -169,6 +211,8 @@ cv::Mat decode_jpeg(std::span<const std::uint8_t> bytes, std::string_view name) 
   std::vector<JSAMPROW> rows(static_cast<std::size_t>(image.rows));
   for (int y = 0; y < image.rows; ++y) rows[static_cast<std::size_t>(y)] = image.ptr<JSAMPLE>(y);
   if (!read_lines(&d, rows.data())) fail("{}: cannot decode ({})", name, d.errors.text);
+  if (d.errors.first_warning[0] != '\0')
+    logger("host")->warn("{}: {} (decoded as libjpeg repaired it)", name, d.errors.first_warning);
   return image;
 }
 
@@ -189,7 +233,8 @@ std::string encode_jpeg(const cv::Mat& image, int quality, std::string_view name
   Compressor c;
   if (!create(&c) || !compress(&c, &image, quality))
     fail("{}: cannot write as JPEG ({})", name, c.errors.text);
-  return {reinterpret_cast<const char*>(c.buffer), static_cast<std::size_t>(c.size)};
+  if (c.out.out_of_memory) fail("{}: cannot write as JPEG (out of memory)", name);
+  return std::move(c.out.bytes);
 }
 
 void write_jpeg(const std::filesystem::path& path, const cv::Mat& image, int quality) {

@@ -66,17 +66,27 @@ bool write_png_end(png_structp png) {
   return true;
 }
 
-// libpng's write structures over a sink of bytes, released however the encoder ends.
+// libpng's write structures, released however the encoder ends (its constructor too).
+struct PngWriteStruct {
+  png_structp png = nullptr;
+  png_infop info = nullptr;
+  PngWriteStruct() = default;
+  PngWriteStruct(const PngWriteStruct&) = delete;
+  PngWriteStruct& operator=(const PngWriteStruct&) = delete;
+  ~PngWriteStruct() { png_destroy_write_struct(&png, &info); }
+};
+
+// libpng's encoder over a sink of bytes.
 class PngEncoder {
  public:
   PngEncoder(cv::Size size, int type, std::string name) : name_(std::move(name)) {
-    png_ = png_create_write_struct(PNG_LIBPNG_VER_STRING, &sink_, on_error, on_warning);
-    if (png_ != nullptr) info_ = png_create_info_struct(png_);
-    if (png_ == nullptr || info_ == nullptr) fail("{}: cannot write as PNG: out of memory", name_);
-    png_set_write_fn(png_, &sink_, on_write, on_flush);
-    if (!write_header(png_, info_, size, CV_MAT_DEPTH(type), CV_MAT_CN(type))) fail_png();
+    write_.png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &sink_, on_error, on_warning);
+    if (write_.png != nullptr) write_.info = png_create_info_struct(write_.png);
+    if (write_.png == nullptr || write_.info == nullptr)
+      fail("{}: cannot write as PNG: out of memory", name_);
+    png_set_write_fn(write_.png, &sink_, on_write, on_flush);
+    if (!write_header(write_.png, write_.info, size, CV_MAT_DEPTH(type), CV_MAT_CN(type))) fail_png();
   }
-  ~PngEncoder() { png_destroy_write_struct(&png_, &info_); }
   PngEncoder(const PngEncoder&) = delete;
   PngEncoder& operator=(const PngEncoder&) = delete;
 
@@ -84,10 +94,10 @@ class PngEncoder {
     std::vector<png_bytep> pointers(static_cast<std::size_t>(rows.rows));
     for (int r = 0; r < rows.rows; ++r)
       pointers[static_cast<std::size_t>(r)] = const_cast<png_bytep>(rows.ptr(r));
-    if (!write_png_rows(png_, pointers.data(), static_cast<png_uint_32>(rows.rows))) fail_png();
+    if (!write_png_rows(write_.png, pointers.data(), static_cast<png_uint_32>(rows.rows))) fail_png();
   }
   void finish() {
-    if (!write_png_end(png_)) fail_png();
+    if (!write_png_end(write_.png)) fail_png();
   }
   // The bytes encoded so far, handed over.
   std::string take() { return std::exchange(sink_.bytes, {}); }
@@ -97,8 +107,7 @@ class PngEncoder {
 
   std::string name_;
   PngSink sink_;
-  png_structp png_ = nullptr;
-  png_infop info_ = nullptr;
+  PngWriteStruct write_;
 };
 
 class PngRowWriter final : public RowWriter {

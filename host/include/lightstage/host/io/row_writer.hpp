@@ -46,7 +46,7 @@ class RowWriter {
   int next_row_ = 0;
 };
 
-// 8- or 16-bit, 1 or 3 channels (BGR in memory, as write_png).
+// 8- or 16-bit, 1, 3 or 4 channels (BGR or BGRA in memory, as write_png and encode_png).
 std::unique_ptr<RowWriter> open_png_writer(const std::filesystem::path& path, cv::Size size, int type);
 // CV_32FC1 or CV_32FC3 (BGR in memory, as write_pfm).
 std::unique_ptr<RowWriter> open_pfm_writer(const std::filesystem::path& path, cv::Size size, int type);
