@@ -194,18 +194,39 @@ void BandSolver::for_each_band(int begin, int end, const BandVisit& visit) {
 
 bool BandSolver::estimates_shadow_threshold() const { return !settings_.shadow_threshold; }
 
+bool BandSolver::needs_shadow_threshold_first() const {
+  return estimates_shadow_threshold() && !settings_.keeps_every_observation();
+}
+
+void BandSolver::add_shadow_samples(ShadowSamples& samples, std::string& source, ImageStack& band,
+                                    const Observations& observations, int y0) const {
+  if (source.empty()) source = shadow_threshold_source(band);
+  samples.add_object(observations);
+  if (background_.empty()) return;
+  band.mask = background_.rowRange(y0, y0 + observations.size.height).clone();
+  samples.add_background(make_observations(band));
+}
+
 ShadowThreshold BandSolver::shadow_threshold() {
   if (!estimates_shadow_threshold()) return {};
   ShadowSamples samples(mask_pixels(0, size().height));
   std::string source;
   for_each_band(0, size().height, [&](ImageStack& band, Observations& observations, int y0) {
-    if (source.empty()) source = shadow_threshold_source(band);
-    samples.add_object(observations);
-    if (background_.empty()) return;
-    band.mask = background_.rowRange(y0, y0 + observations.size.height).clone();
-    samples.add_background(make_observations(band));
+    add_shadow_samples(samples, source, band, observations, y0);
   });
   return samples.estimate(source);
+}
+
+void BandSolver::gather_shadow_threshold() {
+  if (needs_shadow_threshold_first())
+    throw std::logic_error("gather_shadow_threshold: this solve needs the threshold before its first band");
+  gathered_.emplace(mask_pixels(0, size().height));
+  gathered_source_.clear();
+}
+
+ShadowThreshold BandSolver::gathered_shadow_threshold() const {
+  if (!gathered_) throw std::logic_error("gathered_shadow_threshold: gather_shadow_threshold was not called");
+  return gathered_->estimate(gathered_source_);
 }
 
 const SolvePlan& BandSolver::plan_band(ImageStack& band, Observations& observations,
@@ -235,6 +256,7 @@ SolveResult BandSolver::solve_rows(int begin, int end, const ShadowThreshold& th
     const SolvePlan& plan = plan_band(band, observations, threshold);
     if (observations.pixel_count() == 0) {
       sink(SolveResult{}, observations.size.height);
+      if (gathered_) add_shadow_samples(*gathered_, gathered_source_, band, observations, y0);
       return;
     }
     const SolveResult result = solve_planned(observations, plan, /*refit_relighting=*/false);
@@ -247,6 +269,7 @@ SolveResult BandSolver::solve_rows(int begin, int end, const ShadowThreshold& th
       error.add(result.normals, band.ground_truth->normals, observations.mask);
       has_ground_truth = true;
     }
+    if (gathered_) add_shadow_samples(*gathered_, gathered_source_, band, observations, y0);
   });
   return results.finish();
 }

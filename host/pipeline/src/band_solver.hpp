@@ -73,6 +73,15 @@ class BandSolver {
   // Pass 1: the threshold a whole-image solve estimates, from every row
   // (with --shadow-threshold, a default the flag's value replaces: no pass).
   ShadowThreshold shadow_threshold();
+  // Whether the bands' solve needs that estimate before its first band: not
+  // with --shadow-threshold, nor for l2 keeping every observation
+  // (SolveSettings::keeps_every_observation), which records it only.
+  bool needs_shadow_threshold_first() const;
+  // For a solve that estimates the threshold but does not need it first: the
+  // next solve_rows gathers it from the bands it reads (no pass of its own),
+  // and gathered_shadow_threshold() then gives what shadow_threshold() would.
+  void gather_shadow_threshold();
+  ShadowThreshold gathered_shadow_threshold() const;
   // Pass 2, for a method that estimates the object's incidence fall-off
   // (falloff_estimating_options): that estimate from every row, given to
   // every band's solve. No pass for the other methods.
@@ -117,6 +126,10 @@ class BandSolver {
   // as near the plan's height as they allow.
   std::vector<int> rpca_band_ends() const;
   void for_each_band(int begin, int end, const BandVisit& visit);
+  // Adds a band's object and background samples to the threshold's (and the
+  // stack's source of it, at the first band); takes the band's mask.
+  void add_shadow_samples(ShadowSamples& samples, std::string& source, ImageStack& band,
+                          const Observations& observations, int y0) const;
   // Sets a band's lights (warning once about what they are) and returns the
   // plan of every band's solve, made from the first band.
   const SolvePlan& plan_band(ImageStack& band, Observations& observations, const ShadowThreshold& threshold);
@@ -131,6 +144,8 @@ class BandSolver {
   StackResponse response_;
   std::optional<calibration::StackCalibration> applied_;
   cv::Mat background_;
+  std::optional<ShadowSamples> gathered_;  // gather_shadow_threshold()'s samples
+  std::string gathered_source_;
   nlohmann::json light_model_;
   std::optional<SolvePlan> solve_plan_;
   std::optional<report::LightStatisticsTally> light_statistics_;

@@ -119,7 +119,11 @@ SolveReport solve_folder_in_bands(const std::filesystem::path& input, const Solv
   if (plan.report_bytes > plan.limit_bytes)
     logger("host")->warn("{}: the report will take about {}, over --memory-limit {}", input.string(),
                          describe_bytes(plan.report_bytes), describe_bytes(plan.limit_bytes));
-  const ShadowThreshold threshold = solver.shadow_threshold();
+  // l2 keeping every observation reads the stack once: the threshold it only
+  // records is gathered from the bands it solves.
+  const bool gather = solver.estimates_shadow_threshold() && !solver.needs_shadow_threshold_first();
+  if (gather) solver.gather_shadow_threshold();
+  const ShadowThreshold threshold = gather ? ShadowThreshold{} : solver.shadow_threshold();
   solver.estimate_falloff(threshold);
   AngularErrorAccumulator error;
   bool ground_truth = false;
@@ -145,6 +149,9 @@ SolveReport solve_folder_in_bands(const std::filesystem::path& input, const Solv
                                });
     solver.refit_relighting(spill, refittable, result, write);
   }
+  if (gather)
+    result.parameters["shadow_threshold_choice"] =
+        shadow_threshold_choice(solver.gathered_shadow_threshold(), settings);
   nlohmann::json extra = solver.describe();
   if (solver.light_statistics()) extra["light_statistics"] = solver.light_statistics()->summary_json();
   return bands::write_band_solve(input, out, writer, result, extra,

@@ -117,9 +117,7 @@ SolveResult solve_planned(const Observations& observations, const SolvePlan& pla
   const bool shape_prior = settings.method == "shape-prior";
   const ShadowThreshold& used = plan.threshold;
   SolveResult result = method.solve(observations, settings);
-  nlohmann::json threshold = used.to_json();
-  threshold["used_by_l2"] = settings.method == "l2" ? settings.shadow_threshold.has_value() : false;
-  result.parameters["shadow_threshold_choice"] = threshold;
+  result.parameters["shadow_threshold_choice"] = shadow_threshold_choice(used, settings);
   if (!plan.warnings.empty()) result.parameters["warnings"] = plan.warnings;
   // A perspective shape prior sees surfaces whose normals have z < 0; an orthographic camera does not.
   if (!(shape_prior && !settings.shape_prior.intrinsics.empty())) {
@@ -127,10 +125,10 @@ SolveResult solve_planned(const Observations& observations, const SolvePlan& pla
     result.summary.message = result.summary.format_message();
   }
   // One confidence for every method with known lights, from the same
-  // observations and threshold (shape-prior estimates its lighting).
+  // observations and threshold as its solve (shape-prior estimates its lighting).
   if (!shape_prior) {
     ConfidenceOptions confidence;
-    confidence.shadow_threshold = std::max(0.0, used.value);
+    confidence.shadow_threshold = settings.keeps_every_observation() ? 0.0 : std::max(0.0, used.value);
     confidence.threads = settings.threads.value_or(0);
     result.confidence = confidence_from_error(predict_normal_error(observations, result, confidence),
                                               result.solved, confidence.scale_deg);
@@ -146,6 +144,12 @@ SolveResult solve_planned(const Observations& observations, const SolvePlan& pla
     describe_relighting_fit(fitted, result.reflectance);
   }
   return result;
+}
+
+nlohmann::json shadow_threshold_choice(const ShadowThreshold& threshold, const SolveSettings& settings) {
+  nlohmann::json choice = threshold.to_json();
+  choice["used_by_l2"] = settings.method == "l2" && !settings.keeps_every_observation();
+  return choice;
 }
 
 bool refits_relighting(const SolveResult& result) {

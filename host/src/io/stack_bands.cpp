@@ -136,6 +136,7 @@ ImageStack StackBands::read_band(int y0, int rows) {
     if (depth_) depth_->read(y0, rows, truth.depth);
     band.ground_truth = std::move(truth);
   }
+  rows_read_ += static_cast<std::size_t>(rows);
   return band;
 }
 

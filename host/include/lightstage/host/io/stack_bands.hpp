@@ -51,6 +51,9 @@ class StackBands {
   // outside the images, a file that fails to decode there, or a float pixel
   // that is not finite (named by its place in the whole image).
   ImageStack read_band(int y0, int rows);
+  // The rows read_band has decoded so far, summed over its calls: how many
+  // passes over the stack a solve took.
+  std::size_t rows_read() const { return rows_read_; }
 
  private:
   void open_frames();
@@ -64,6 +67,7 @@ class StackBands {
   std::map<std::string, std::unique_ptr<RowReader>> darks_;  // by file name, shared by the frames naming it
   std::unique_ptr<RowReader> normals_, depth_;
   bool opened_ = false;
+  std::size_t rows_read_ = 0;
 };
 
 }  // namespace lightstage::io

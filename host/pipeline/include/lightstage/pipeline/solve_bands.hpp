@@ -8,7 +8,9 @@
 // object, each in a pass over every band first:
 //   the shadow threshold's samples (shadow_threshold.hpp), drawn from the
 //     whole image's pixels as a whole-image solve draws them (not with
-//     --shadow-threshold);
+//     --shadow-threshold; l2 keeping every observation only records the
+//     threshold, so its samples are gathered from the bands it solves and
+//     the stack is read once);
 //   the incidence fall-off κ of the bi-polynomial methods and auto
 //     (incidence_falloff.hpp; not with --falloff);
 // then each band is solved; a pixel's place in the whole image

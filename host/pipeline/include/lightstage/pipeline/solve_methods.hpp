@@ -64,6 +64,8 @@ SolvePlan plan_solve(const Observations& observations, const SolveSettings& sett
                      const ShadowThreshold& data_threshold);
 SolveResult solve_planned(const Observations& observations, const SolvePlan& plan,
                           bool refit_relighting = true);
+// parameters.shadow_threshold_choice: the threshold and whether l2 used it.
+nlohmann::json shadow_threshold_choice(const ShadowThreshold& threshold, const SolveSettings& settings);
 // Whether solve_planned refits `result`'s coefficients for relighting.
 bool refits_relighting(const SolveResult& result);
 // What that refit is given (the result's order, the plan's threshold and threads).
