@@ -32,7 +32,7 @@ def main():
     parser.add_argument("--scene", default="bumps")
     parser.add_argument("--colour", action="store_true", help="RGB frames (simulate --colour patches)")
     parser.add_argument("--methods", default="l2,robust,monotonic,rpca,l1,sbl,bilinear,biquadratic,bicubic,auto")
-    parser.add_argument("--memory-limit", default="1.5G")
+    parser.add_argument("--memory-limit", default="1.5G", help="as solve takes it: auto, bytes or 1.5G")
     parser.add_argument("--lightstage", default=os.path.join(ROOT, "build", "bin", "lightstage"))
     parser.add_argument("--work", help="folder for the stack and results (default: a temporary one)")
     parser.add_argument("--keep", action="store_true", help="keep --work afterwards")

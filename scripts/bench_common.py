@@ -10,6 +10,9 @@ UNITS = {"K": 1 << 10, "M": 1 << 20, "G": 1 << 30, "T": 1 << 40}
 
 
 def parse_size(text):
+    """Bytes of a --memory-limit as `lightstage solve` reads it: auto (half the machine's), bytes, 1.5G."""
+    if text == "auto":
+        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") // 2
     if text[-1].upper() in UNITS:
         return int(float(text[:-1]) * UNITS[text[-1].upper()])
     return int(text)
