@@ -132,14 +132,14 @@ TEST(SolveBands, EveryMethodThatSolvesInBandsGivesTheWholeImageResult) {
     expect_bands_equal_whole(stack, settings_for(method, "auto"), dir);
 }
 
-// l2 keeping every observation only records the shadow threshold, so its
-// samples come from the bands it solves: one pass over the stack. A method
-// that drops shadows needs the threshold before its first band: two passes,
-// and one again with --shadow-threshold. The parameters equal the whole
-// image's either way (EveryMethodThatSolvesInBandsGivesTheWholeImageResult).
+// l2 drops no shadows and only records the shadow threshold, so its samples
+// come from the bands it solves: one pass over the stack. A method that drops
+// shadows needs the threshold before its first band: two passes, and one
+// again with --shadow-threshold. On a sphere with background around it and
+// bands without a mask pixel, the threshold gathered equals the whole image's.
 TEST(SolveBands, L2ReadsTheStackOnceAndAMethodThatDropsShadowsTwice) {
   const fs::path dir = lightstage::testing::scratch_dir();
-  const fs::path stack = simulated(dir / "stack", "bumps");
+  const fs::path stack = simulated(dir / "stack", "sphere");
   const io::StackOutline outline = io::read_stack_outline(stack);
   const auto rows = static_cast<std::size_t>(outline.size.height);
   struct Case {
@@ -149,25 +149,33 @@ TEST(SolveBands, L2ReadsTheStackOnceAndAMethodThatDropsShadowsTwice) {
   };
   for (const Case& c : {Case{"l2", std::nullopt, 1}, Case{"robust", std::nullopt, 2}, Case{"l2", 0.01, 1},
                         Case{"robust", 0.01, 1}}) {
+    const std::string name = fmt::format("{} {}", c.method, c.flag ? "with the flag" : "without the flag");
     SolveSettings settings = settings_for(c.method, "auto");
     settings.shadow_threshold = c.flag;
     settings.resolve();
+    const SolveReport whole = solve_folder(stack, settings, dir / (name + " whole"));
     settings.memory_limit = limit_for_rows(stack, 5, settings);
     const BandPlan plan =
         plan_bands(outline, parse_memory_limit(settings.memory_limit), coefficient_terms(settings.method),
                    solver_working_bytes(settings, outline.images));
     ASSERT_EQ(plan.bands, 8);
     io::StackBands bands(stack);
-    const fs::path out = dir / fmt::format("{}_{}", c.method, c.flag ? "flag" : "data");
-    const SolveReport report = solve_folder_in_bands(stack, settings, out, {}, bands, plan);
-    EXPECT_EQ(bands.rows_read(), c.passes * rows) << c.method << (c.flag ? " with the flag" : "");
-    const auto& choice = report.summary["parameters"]["shadow_threshold_choice"];
-    EXPECT_EQ(choice["source"], c.flag ? "flag" : "noise floor") << c.method;
-    EXPECT_EQ(choice["used_by_l2"], c.flag && std::string(c.method) == "l2") << c.method;
-    // l2's confidence counts every facing observation, whatever the threshold.
-    EXPECT_EQ(report.summary["parameters"]["confidence"]["shadow_threshold"],
+    const SolveReport banded = solve_folder_in_bands(stack, settings, dir / name, {}, bands, plan);
+    EXPECT_EQ(bands.rows_read(), c.passes * rows) << name;
+    const auto& choice = banded.summary["parameters"]["shadow_threshold_choice"];
+    EXPECT_EQ(choice, whole.summary["parameters"]["shadow_threshold_choice"]) << name;
+    EXPECT_EQ(choice["source"], c.flag ? "flag" : "noise floor") << name;
+    if (!c.flag) {
+      EXPECT_GT(choice["object_samples"].get<int>(), 0) << name;
+      EXPECT_GT(choice["background_samples"].get<int>(), 0) << name;
+    }
+    EXPECT_EQ(choice["used_by_l2"], c.flag && std::string(c.method) == "l2") << name;
+    // l2 without the flag: its confidence takes every positive observation.
+    EXPECT_EQ(banded.summary["parameters"]["confidence"]["shadow_threshold"],
               std::string(c.method) == "l2" && !c.flag ? 0.0 : choice["value"].get<double>())
-        << c.method;
+        << name;
+    expect_same_map(io::read_pfm(dir / name / "confidence.pfm"),
+                    io::read_pfm(dir / (name + " whole") / "confidence.pfm"), name);
   }
 }
 

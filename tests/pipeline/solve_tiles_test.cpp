@@ -140,12 +140,12 @@ TEST(SolveTiles, WhatWouldMixRunsIsRefusedByName) {
   EXPECT_FALSE(fs::exists(out / "summary.json"));
   // A damaged part is named, and how to mend it.
   std::ofstream(out / "tiles" / "part-0-of-3" / "part.json")
-      << R"({"format": "lightstage solve tile part 1"})";
+      << R"({"format": "lightstage solve tile part 2"})";
   EXPECT_THAT(error_of([&] { solve_tile(stack, robust, out, {}, "merge"); }),
               HasSubstr("part-0-of-3/part.json: [json.exception"));
   std::ofstream(out / "tiles" / "part-0-of-3" / "part.json") << "{not json";
   EXPECT_THAT(error_of([&] { solve_tile(stack, robust, out, {}, "merge"); }),
-              HasSubstr("part-0-of-3/part.json: not a 'lightstage solve tile part 1' file"));
+              HasSubstr("part-0-of-3/part.json: not a 'lightstage solve tile part 2' file"));
 
   // A plan made for another capture is not used for this one.
   const fs::path other = simulated(dir / "other");

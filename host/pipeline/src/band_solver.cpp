@@ -195,7 +195,7 @@ void BandSolver::for_each_band(int begin, int end, const BandVisit& visit) {
 bool BandSolver::estimates_shadow_threshold() const { return !settings_.shadow_threshold; }
 
 bool BandSolver::needs_shadow_threshold_first() const {
-  return estimates_shadow_threshold() && !settings_.keeps_every_observation();
+  return estimates_shadow_threshold() && settings_.drops_shadows();
 }
 
 void BandSolver::add_shadow_samples(ShadowSamples& samples, std::string& source, ImageStack& band,
@@ -222,10 +222,13 @@ void BandSolver::gather_shadow_threshold() {
     throw std::logic_error("gather_shadow_threshold: this solve needs the threshold before its first band");
   gathered_.emplace(mask_pixels(0, size().height));
   gathered_source_.clear();
+  gathered_all_rows_ = false;
 }
 
 ShadowThreshold BandSolver::gathered_shadow_threshold() const {
-  if (!gathered_) throw std::logic_error("gathered_shadow_threshold: gather_shadow_threshold was not called");
+  if (!gathered_all_rows_)
+    throw std::logic_error(
+        "gathered_shadow_threshold: no solve_rows over every row since gather_shadow_threshold");
   return gathered_->estimate(gathered_source_);
 }
 
@@ -251,12 +254,15 @@ void BandSolver::estimate_falloff(const ShadowThreshold& threshold) {
 SolveResult BandSolver::solve_rows(int begin, int end, const ShadowThreshold& threshold,
                                    AngularErrorAccumulator& error, bool& has_ground_truth,
                                    const BandSink& sink) {
+  const bool gather = gathered_.has_value();
+  if (gather && (gathered_all_rows_ || begin != 0 || end != size().height))
+    throw std::logic_error("solve_rows: the shadow threshold is gathered once, by a solve over every row");
   BandResults results({size().width, end - begin}, /*keep_maps=*/false);
   for_each_band(begin, end, [&](ImageStack& band, Observations& observations, int y0) {
     const SolvePlan& plan = plan_band(band, observations, threshold);
     if (observations.pixel_count() == 0) {
       sink(SolveResult{}, observations.size.height);
-      if (gathered_) add_shadow_samples(*gathered_, gathered_source_, band, observations, y0);
+      if (gather) add_shadow_samples(*gathered_, gathered_source_, band, observations, y0);
       return;
     }
     const SolveResult result = solve_planned(observations, plan, /*refit_relighting=*/false);
@@ -269,8 +275,9 @@ SolveResult BandSolver::solve_rows(int begin, int end, const ShadowThreshold& th
       error.add(result.normals, band.ground_truth->normals, observations.mask);
       has_ground_truth = true;
     }
-    if (gathered_) add_shadow_samples(*gathered_, gathered_source_, band, observations, y0);
+    if (gather) add_shadow_samples(*gathered_, gathered_source_, band, observations, y0);
   });
+  gathered_all_rows_ = gather;
   return results.finish();
 }
 

@@ -67,19 +67,21 @@ class BandSolver {
   BandSolver(const std::filesystem::path& input, const SolveSettings& settings,
              const SolveCalibration& calibration, io::StackBands& stack, const BandPlan& plan);
 
-  // Whether the shadow threshold is estimated from the data (a pass over
-  // every row): not with --shadow-threshold.
+  // Whether the shadow threshold is estimated from the data (from every row):
+  // not with --shadow-threshold.
   bool estimates_shadow_threshold() const;
   // Pass 1: the threshold a whole-image solve estimates, from every row
   // (with --shadow-threshold, a default the flag's value replaces: no pass).
   ShadowThreshold shadow_threshold();
   // Whether the bands' solve needs that estimate before its first band: not
-  // with --shadow-threshold, nor for l2 keeping every observation
-  // (SolveSettings::keeps_every_observation), which records it only.
+  // with --shadow-threshold, nor for a solve that drops no shadows
+  // (SolveSettings::drops_shadows: l2), which records it only.
   bool needs_shadow_threshold_first() const;
   // For a solve that estimates the threshold but does not need it first: the
-  // next solve_rows gathers it from the bands it reads (no pass of its own),
-  // and gathered_shadow_threshold() then gives what shadow_threshold() would.
+  // next solve_rows, over every row, gathers it from the bands it reads (no
+  // pass of its own), and gathered_shadow_threshold() then gives what
+  // shadow_threshold() would. Throws std::logic_error for a solve that needs
+  // it first.
   void gather_shadow_threshold();
   ShadowThreshold gathered_shadow_threshold() const;
   // Pass 2, for a method that estimates the object's incidence fall-off
@@ -146,6 +148,7 @@ class BandSolver {
   cv::Mat background_;
   std::optional<ShadowSamples> gathered_;  // gather_shadow_threshold()'s samples
   std::string gathered_source_;
+  bool gathered_all_rows_ = false;  // a solve_rows over every row has gathered them
   nlohmann::json light_model_;
   std::optional<SolvePlan> solve_plan_;
   std::optional<report::LightStatisticsTally> light_statistics_;

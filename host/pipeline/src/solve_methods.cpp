@@ -128,7 +128,7 @@ SolveResult solve_planned(const Observations& observations, const SolvePlan& pla
   // observations and threshold as its solve (shape-prior estimates its lighting).
   if (!shape_prior) {
     ConfidenceOptions confidence;
-    confidence.shadow_threshold = settings.keeps_every_observation() ? 0.0 : std::max(0.0, used.value);
+    confidence.shadow_threshold = settings.drops_shadows() ? std::max(0.0, used.value) : 0.0;
     confidence.threads = settings.threads.value_or(0);
     result.confidence = confidence_from_error(predict_normal_error(observations, result, confidence),
                                               result.solved, confidence.scale_deg);
@@ -148,7 +148,7 @@ SolveResult solve_planned(const Observations& observations, const SolvePlan& pla
 
 nlohmann::json shadow_threshold_choice(const ShadowThreshold& threshold, const SolveSettings& settings) {
   nlohmann::json choice = threshold.to_json();
-  choice["used_by_l2"] = settings.method == "l2" && !settings.keeps_every_observation();
+  choice["used_by_l2"] = settings.method == "l2" && settings.drops_shadows();
   return choice;
 }
 

@@ -26,7 +26,8 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 constexpr const char* kPlanFormat = "lightstage solve tile plan 1";
-constexpr const char* kPartFormat = "lightstage solve tile part 1";
+// 2: l2's confidence takes every positive observation, not those above the threshold.
+constexpr const char* kPartFormat = "lightstage solve tile part 2";
 // More jobs than this is a typing error, not a cluster.
 constexpr int kMaxTiles = 100000;
 

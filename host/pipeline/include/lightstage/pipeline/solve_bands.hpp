@@ -19,8 +19,9 @@
 // relighting over the whole object (reflectance/relighting_fit.hpp): their
 // solved bands wait in a spill file in the output folder (about 80 bytes a
 // pixel) while a sample of every band fits the object's model, then each band
-// is refitted and written (two more passes). rpca decomposes blocks of pixels
-// and shape-prior smooths across them: they are refused in bands.
+// is refitted and written (two more passes). rpca decomposes blocks cut from
+// runs of whole rows, which its bands keep whole; shape-prior smooths across
+// the image and is refused in bands.
 
 #include "lightstage/host/io/stack_bands.hpp"
 #include "lightstage/pipeline/solve_folder.hpp"

@@ -57,7 +57,7 @@ SolveResult solve_with(const Observations& observations, const SolveSettings& se
 // over the whole object: refits_relighting).
 struct SolvePlan {
   SolveSettings settings;             // with the data threshold given to every method but l2
-  ShadowThreshold threshold;          // the threshold used
+  ShadowThreshold threshold;          // the threshold used (l2 dropping no shadows: the one recorded)
   std::vector<std::string> warnings;  // logged by plan_solve
 };
 SolvePlan plan_solve(const Observations& observations, const SolveSettings& settings,

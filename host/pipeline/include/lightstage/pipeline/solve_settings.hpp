@@ -72,11 +72,12 @@ struct SolveSettings {
   // observation because that is the published least-squares baseline
   // (DiLiGenT's 4.10 deg on the ball) it reproduces.
   void use_data_shadow_threshold(double value);
-  // l2 without --shadow-threshold: the solve keeps every observation and its
-  // confidence counts every one facing the answer, so nothing it writes but
+  // Whether the solve drops observations at or below a shadow threshold:
+  // every method but l2 without --shadow-threshold. That l2 and its
+  // confidence take every positive observation, so nothing it writes but
   // summary.json's record of the estimate depends on the data's threshold
   // (a stack solved in bands then needs no pass to estimate it first).
-  bool keeps_every_observation() const { return method == "l2" && !shadow_threshold; }
+  bool drops_shadows() const { return method != "l2" || shadow_threshold.has_value(); }
   // Gives every method's options the same progress report (solve_result.hpp).
   void set_progress(const SolveProgress& progress);
 };
