@@ -5,6 +5,7 @@
 // BGR order, 16-bit samples in the machine's byte order.
 #include "io/row_readers.hpp"
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/huge_pages.hpp"
 #include "lightstage/host/io/stack_io.hpp"
 
 #include <png.h>
@@ -188,6 +189,7 @@ cv::Mat read_png(const std::filesystem::path& path) {
   const PngLayout& layout = file.layout();
   cv::Mat image(static_cast<int>(layout.height), static_cast<int>(layout.width),
                 CV_MAKETYPE(layout.bit_depth == 16 ? CV_16U : CV_8U, layout.channels));
+  advise_huge_pages(image.data, image.total() * image.elemSize());  // a stack's frames are most of its memory
   std::vector<png_bytep> rows(static_cast<std::size_t>(image.rows));
   for (int y = 0; y < image.rows; ++y) rows[static_cast<std::size_t>(y)] = image.ptr<png_byte>(y);
   file.read_whole(rows);

@@ -3,6 +3,7 @@
 #include "io/file_extension.hpp"
 #include "io/row_readers.hpp"
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/huge_pages.hpp"
 #include "lightstage/host/io/image_io.hpp"
 #include "lightstage/host/io/pfm.hpp"
 #include "lightstage/host/io/raw_image.hpp"
@@ -103,6 +104,7 @@ void RowReader::read(int y0, int rows, cv::Mat& out) {
     fail("{}: rows {} to {} are outside its {} rows", path_.string(), y0,
          static_cast<std::int64_t>(y0) + rows - 1, size_.height);
   out.create(rows, size_.width, type_);
+  advise_huge_pages(out.data, out.total() * out.elemSize());  // every band's frames are written afresh
   read_rows(y0, rows, out);
 }
 
