@@ -119,7 +119,7 @@ SolveReport solve_folder_in_bands(const std::filesystem::path& input, const Solv
   if (plan.report_bytes > plan.limit_bytes)
     logger("host")->warn("{}: the report will take about {}, over --memory-limit {}", input.string(),
                          describe_bytes(plan.report_bytes), describe_bytes(plan.limit_bytes));
-  // l2 keeping every observation reads the stack once: the threshold it only
+  // l2 dropping no shadows reads the stack once: the threshold it only
   // records is gathered from the bands it solves.
   const bool gather = solver.estimates_shadow_threshold() && !solver.needs_shadow_threshold_first();
   if (gather) solver.gather_shadow_threshold();

@@ -8,7 +8,7 @@
 // object, each in a pass over every band first:
 //   the shadow threshold's samples (shadow_threshold.hpp), drawn from the
 //     whole image's pixels as a whole-image solve draws them (not with
-//     --shadow-threshold; l2 keeping every observation only records the
+//     --shadow-threshold; l2 dropping no shadows only records the
 //     threshold, so its samples are gathered from the bands it solves and
 //     the stack is read once);
 //   the incidence fall-off κ of the bi-polynomial methods and auto
