@@ -194,17 +194,14 @@ void BandSolver::for_each_band(int begin, int end, const BandVisit& visit) {
 
 bool BandSolver::estimates_shadow_threshold() const { return !settings_.shadow_threshold; }
 
-bool BandSolver::needs_shadow_threshold_first() const {
-  return estimates_shadow_threshold() && settings_.drops_shadows();
-}
-
-void BandSolver::add_shadow_samples(ShadowSamples& samples, std::string& source, ImageStack& band,
+void BandSolver::add_shadow_samples(ShadowSamples& samples, std::string& source, const ImageStack& band,
                                     const Observations& observations, int y0) const {
   if (source.empty()) source = shadow_threshold_source(band);
   samples.add_object(observations);
   if (background_.empty()) return;
-  band.mask = background_.rowRange(y0, y0 + observations.size.height).clone();
-  samples.add_background(make_observations(band));
+  ImageStack background = band;  // the band's frames (their pixels shared), the background's mask
+  background.mask = background_.rowRange(y0, y0 + observations.size.height).clone();
+  samples.add_background(make_observations(background));
 }
 
 ShadowThreshold BandSolver::shadow_threshold() {
@@ -217,12 +214,12 @@ ShadowThreshold BandSolver::shadow_threshold() {
   return samples.estimate(source);
 }
 
-void BandSolver::gather_shadow_threshold() {
-  if (needs_shadow_threshold_first())
-    throw std::logic_error("gather_shadow_threshold: this solve needs the threshold before its first band");
+bool BandSolver::gather_shadow_threshold() {
+  if (!estimates_shadow_threshold() || settings_.drops_shadows()) return false;
   gathered_.emplace(mask_pixels(0, size().height));
   gathered_source_.clear();
   gathered_all_rows_ = false;
+  return true;
 }
 
 ShadowThreshold BandSolver::gathered_shadow_threshold() const {
@@ -259,10 +256,10 @@ SolveResult BandSolver::solve_rows(int begin, int end, const ShadowThreshold& th
     throw std::logic_error("solve_rows: the shadow threshold is gathered once, by a solve over every row");
   BandResults results({size().width, end - begin}, /*keep_maps=*/false);
   for_each_band(begin, end, [&](ImageStack& band, Observations& observations, int y0) {
+    if (gather) add_shadow_samples(*gathered_, gathered_source_, band, observations, y0);
     const SolvePlan& plan = plan_band(band, observations, threshold);
     if (observations.pixel_count() == 0) {
       sink(SolveResult{}, observations.size.height);
-      if (gather) add_shadow_samples(*gathered_, gathered_source_, band, observations, y0);
       return;
     }
     const SolveResult result = solve_planned(observations, plan, /*refit_relighting=*/false);
@@ -275,7 +272,6 @@ SolveResult BandSolver::solve_rows(int begin, int end, const ShadowThreshold& th
       error.add(result.normals, band.ground_truth->normals, observations.mask);
       has_ground_truth = true;
     }
-    if (gather) add_shadow_samples(*gathered_, gathered_source_, band, observations, y0);
   });
   gathered_all_rows_ = gather;
   return results.finish();

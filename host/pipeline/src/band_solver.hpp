@@ -73,16 +73,12 @@ class BandSolver {
   // Pass 1: the threshold a whole-image solve estimates, from every row
   // (with --shadow-threshold, a default the flag's value replaces: no pass).
   ShadowThreshold shadow_threshold();
-  // Whether the bands' solve needs that estimate before its first band: not
-  // with --shadow-threshold, nor for a solve that drops no shadows
-  // (SolveSettings::drops_shadows: l2), which records it only.
-  bool needs_shadow_threshold_first() const;
-  // For a solve that estimates the threshold but does not need it first: the
-  // next solve_rows, over every row, gathers it from the bands it reads (no
-  // pass of its own), and gathered_shadow_threshold() then gives what
-  // shadow_threshold() would. Throws std::logic_error for a solve that needs
-  // it first.
-  void gather_shadow_threshold();
+  // For a solve that estimates the threshold but drops no shadows
+  // (SolveSettings::drops_shadows: l2), which only records it; returns
+  // whether this is one. The next solve_rows, over every row,
+  // gathers it from the bands it reads (no pass of its own), and
+  // gathered_shadow_threshold() then gives what shadow_threshold() would.
+  bool gather_shadow_threshold();
   ShadowThreshold gathered_shadow_threshold() const;
   // Pass 2, for a method that estimates the object's incidence fall-off
   // (falloff_estimating_options): that estimate from every row, given to
@@ -129,8 +125,8 @@ class BandSolver {
   std::vector<int> rpca_band_ends() const;
   void for_each_band(int begin, int end, const BandVisit& visit);
   // Adds a band's object and background samples to the threshold's (and the
-  // stack's source of it, at the first band); takes the band's mask.
-  void add_shadow_samples(ShadowSamples& samples, std::string& source, ImageStack& band,
+  // stack's source of it, at the first band).
+  void add_shadow_samples(ShadowSamples& samples, std::string& source, const ImageStack& band,
                           const Observations& observations, int y0) const;
   // Sets a band's lights (warning once about what they are) and returns the
   // plan of every band's solve, made from the first band.

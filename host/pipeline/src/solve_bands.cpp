@@ -121,8 +121,7 @@ SolveReport solve_folder_in_bands(const std::filesystem::path& input, const Solv
                          describe_bytes(plan.report_bytes), describe_bytes(plan.limit_bytes));
   // l2 dropping no shadows reads the stack once: the threshold it only
   // records is gathered from the bands it solves.
-  const bool gather = solver.estimates_shadow_threshold() && !solver.needs_shadow_threshold_first();
-  if (gather) solver.gather_shadow_threshold();
+  const bool gather = solver.gather_shadow_threshold();
   const ShadowThreshold threshold = gather ? ShadowThreshold{} : solver.shadow_threshold();
   solver.estimate_falloff(threshold);
   AngularErrorAccumulator error;
