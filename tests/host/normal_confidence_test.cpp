@@ -195,6 +195,61 @@ TEST(NormalConfidence, LeavesANormalTheDataDoNotFixInfinite) {
   EXPECT_GT(confidence.at<float>(0, 1), 0.0f);
 }
 
+// The solve's clamp of a normal facing away, as solve_with applies it before the separate pass.
+SolveResult facing_the_camera(SolveResult result) {
+  result.normals.forEach<cv::Vec3f>([](cv::Vec3f& n, const int*) {
+    if (n[2] < 0) n = on_horizon(n);
+  });
+  return result;
+}
+
+// l2 solving one pixel at a time predicts each error while it has the pixel's
+// lights: the same floats as the separate pass over the solved (and clamped)
+// answer, with near lights, saturated observations and a normal facing away.
+TEST(NormalConfidence, L2PredictsAsItSolvesWhatTheSeparatePassPredicts) {
+  for (const bool near : {true, false}) {
+    SCOPED_TRACE(near ? "near lights" : "distant lights");
+    SyntheticScene scene = make_scene(12, 10, 24, 8, /*clamp_shadows=*/true);
+    Observations& observations = scene.observations;
+    add_noise(observations, 0.01, 9);
+    for (Eigen::Index p = 0; p < observations.intensities.rows(); p += 7)
+      observations.saturated(p, p % 24) = true;
+    if (near) {
+      NearLights lights;
+      lights.led_positions_mm = 400.0 * observations.lights;
+      lights.points_mm = Eigen::MatrixX3d::Zero(observations.intensities.rows(), 3);
+      for (std::size_t p = 0; p < observations.pixels.size(); ++p)
+        lights.points_mm.row(static_cast<Eigen::Index>(p)) << observations.pixels[p].x,
+            observations.pixels[p].y, 0;
+      observations.near = lights;
+    }
+    // Pixel 0 is exactly Lambertian for a normal below the horizon, negative values and all.
+    const Vec3 away = Vec3(0.8, 0.3, -0.5).normalized();
+    for (Eigen::Index j = 0; j < observations.intensities.cols(); ++j)
+      observations.intensities(0, j) = static_cast<float>(0.6 * observations.lights.row(j).dot(away));
+    ConfidenceOptions confidence;
+    confidence.shadow_threshold = 0.02;
+    L2Options options;
+    options.shadow_threshold = near ? -1 : 0.02;  // one pixel at a time either way
+    options.threads = 2;
+    options.confidence = confidence;
+    const SolveResult predicting = solve_lambertian(observations, options);
+    ASSERT_FALSE(predicting.predicted_error.empty());
+    EXPECT_LT(predicting.normals.at<cv::Vec3f>(0, 0)[2], 0.0f);
+    const cv::Mat separate = predict_normal_error(observations, facing_the_camera(predicting), confidence);
+    int finite = 0;
+    for (const cv::Point& at : observations.pixels) {
+      const float fused = predicting.predicted_error.at<float>(at), alone = separate.at<float>(at);
+      EXPECT_TRUE(fused == alone || (std::isinf(fused) && std::isinf(alone)))
+          << at << ": " << fused << " vs " << alone;
+      finite += std::isfinite(alone) && alone > 0 ? 1 : 0;
+    }
+    EXPECT_GT(finite, 100);
+    options.confidence.reset();
+    EXPECT_TRUE(solve_lambertian(observations, options).predicted_error.empty());
+  }
+}
+
 TEST(NormalConfidence, RefusesOptionsOutOfRangeNamingTheField) {
   ConfidenceOptions options;
   options.trim = 0.5;

@@ -86,9 +86,7 @@ std::size_t clamp_facing_away(SolveResult& result) {
     for (int x = 0; x < result.normals.cols; ++x) {
       if (solved[x] == 0 || !(n[x][2] < 0)) continue;
       ++count;
-      const float horizontal = std::hypot(n[x][0], n[x][1]);
-      n[x] = horizontal > 1e-6f ? cv::Vec3f(n[x][0] / horizontal, n[x][1] / horizontal, 0.f)
-                                : cv::Vec3f(0.f, 0.f, 1.f);
+      n[x] = on_horizon(n[x]);
     }
   }
   return count;

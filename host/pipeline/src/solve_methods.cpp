@@ -116,7 +116,19 @@ SolveResult solve_planned(const Observations& observations, const SolvePlan& pla
   const SolveMethod& method = find_solve_method(settings.method);
   const bool shape_prior = settings.method == "shape-prior";
   const ShadowThreshold& used = plan.threshold;
-  SolveResult result = method.solve(observations, settings);
+  // One confidence for every method with known lights, from the same
+  // observations and threshold as its solve (shape-prior estimates its lighting).
+  ConfidenceOptions confidence;
+  confidence.shadow_threshold = settings.drops_shadows() ? std::max(0.0, used.value) : 0.0;
+  confidence.threads = settings.threads.value_or(0);
+  SolveResult result;
+  if (settings.method == "l2") {  // predicts each pixel's error while it has the pixel's lights
+    SolveSettings predicting = settings;
+    predicting.l2.confidence = confidence;
+    result = method.solve(observations, predicting);
+  } else {
+    result = method.solve(observations, settings);
+  }
   result.parameters["shadow_threshold_choice"] = shadow_threshold_choice(used, settings);
   if (!plan.warnings.empty()) result.parameters["warnings"] = plan.warnings;
   // A perspective shape prior sees surfaces whose normals have z < 0; an orthographic camera does not.
@@ -124,14 +136,12 @@ SolveResult solve_planned(const Observations& observations, const SolvePlan& pla
     result.summary.findings.push_back(facing_away_fact(clamp_facing_away(result)));
     result.summary.message = result.summary.format_message();
   }
-  // One confidence for every method with known lights, from the same
-  // observations and threshold as its solve (shape-prior estimates its lighting).
   if (!shape_prior) {
-    ConfidenceOptions confidence;
-    confidence.shadow_threshold = settings.drops_shadows() ? std::max(0.0, used.value) : 0.0;
-    confidence.threads = settings.threads.value_or(0);
-    result.confidence = confidence_from_error(predict_normal_error(observations, result, confidence),
-                                              result.solved, confidence.scale_deg);
+    const cv::Mat error = result.predicted_error.empty()
+                              ? predict_normal_error(observations, result, confidence)
+                              : result.predicted_error;
+    result.confidence = confidence_from_error(error, result.solved, confidence.scale_deg);
+    result.predicted_error.release();
     result.parameters["confidence"] = confidence.to_json();
   }
   if (observations.chroma.rows() > 0) result.chroma = chroma_image(observations, result.solved);

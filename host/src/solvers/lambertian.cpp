@@ -2,6 +2,7 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/parallel.hpp"
+#include "lightstage/host/solvers/pixel_observations.hpp"
 #include "solvers/pixel_driver.hpp"
 
 #include <Eigen/Dense>
@@ -10,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <vector>
 
 namespace lightstage {
@@ -27,6 +29,7 @@ struct Counters {
 
 struct Maps {
   cv::Mat normals, albedo, residual, solved;
+  cv::Mat predicted_error;  // with L2Options::confidence
 };
 
 // Stores s for one pixel; false (degenerate) when s is zero or not finite.
@@ -101,10 +104,26 @@ Counters solve_all(const Observations& obs, const L2Options& options, Maps& maps
   return total;
 }
 
+// The confidence's predicted error at the answer just stored for pixel `p`,
+// judged as predict_normal_error judges it: on the horizon where it faced
+// away. `data` holds the pixel's lights (and near gains) already.
+float predicted_error(const Observations& obs, std::size_t p, const Maps& maps, PixelObservations& data,
+                      PixelErrorPredictor& predictor) {
+  const cv::Point at = obs.pixels[p];
+  cv::Vec3f stored = maps.normals.at<cv::Vec3f>(at);
+  if (stored[2] < 0) stored = on_horizon(stored);
+  Eigen::Vector3d n;
+  if (!judged_normal(stored, n)) return 0.f;
+  load_pixel_values(obs, p, /*drop_saturated=*/true, data);
+  return static_cast<float>(predictor.predict(data, n, maps.albedo.at<float>(at)));
+}
+
 // Per-pixel selection: shadows dropped, the lowest t_low kept, 3×3 normal equations.
 // With near lights each pixel has its own light directions, and its values
 // are divided by the falloff gains before the fit (the shadow threshold
 // still applies to the observed values).
+// With L2Options::confidence each solved pixel's error is predicted while its
+// lights are at hand (a near light's direction is the costliest part of both).
 Counters solve_selected(const Observations& obs, const L2Options& options, Maps& maps) {
   const Eigen::Index images = static_cast<Eigen::Index>(obs.image_count());
   const std::size_t pixels = obs.pixel_count();
@@ -115,8 +134,10 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
     Counters& counters = per_chunk[chunk];
     std::vector<Eigen::Index> kept;
     kept.reserve(static_cast<std::size_t>(images));
-    Eigen::MatrixX3d near_directions;
-    Eigen::VectorXd near_gains;
+    PixelObservations data;  // the pixel's lights, and for the confidence its values
+    if (!obs.near) data.lights = obs.lights;
+    std::optional<PixelErrorPredictor> predictor;
+    if (options.confidence) predictor.emplace(*options.confidence);
     Eigen::VectorXf corrected(images);
     Eigen::VectorXd every_value(images), fitted(images);
     detail::ProgressBatch batch(options.progress);
@@ -125,10 +146,10 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
       const auto observed = obs.intensities.row(static_cast<Eigen::Index>(p));
       corrected = observed.transpose();
       if (obs.near) {
-        near_light_directions(*obs.near, p, near_directions, near_gains);
-        corrected.array() /= near_gains.cast<float>().array();
+        near_light_directions(*obs.near, p, data.lights, data.near_gains);
+        corrected.array() /= data.near_gains.cast<float>().array();
       }
-      const Eigen::MatrixX3d& lights = obs.near ? near_directions : obs.lights;
+      const Eigen::MatrixX3d& lights = data.lights;
       const auto& row = corrected;
       kept.clear();
       for (Eigen::Index j = 0; j < images; ++j) {
@@ -184,6 +205,8 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
       }
       if (store(s, std::sqrt(squared / static_cast<double>(kept.size())), obs.pixels[p], maps)) {
         ++counters.solved;
+        if (predictor)
+          maps.predicted_error.at<float>(obs.pixels[p]) = predicted_error(obs, p, maps, data, *predictor);
       } else {
         ++counters.degenerate;
       }
@@ -226,7 +249,8 @@ SolveResult solve_lambertian(const Observations& observations, const L2Options& 
          observations.image_count());
   }
   Maps maps{cv::Mat(size, CV_32FC3, cv::Scalar::all(0)), cv::Mat(size, CV_32FC1, cv::Scalar::all(0)),
-            cv::Mat(size, CV_32FC1, cv::Scalar::all(0)), cv::Mat(size, CV_8UC1, cv::Scalar::all(0))};
+            cv::Mat(size, CV_32FC1, cv::Scalar::all(0)), cv::Mat(size, CV_8UC1, cv::Scalar::all(0)),
+            cv::Mat()};
   if (observations.near &&
       (observations.near->image_count() != observations.image_count() ||
        static_cast<std::size_t>(observations.near->points_mm.rows()) != observations.pixel_count())) {
@@ -236,6 +260,7 @@ SolveResult solve_lambertian(const Observations& observations, const L2Options& 
   }
   // Near lights: every pixel has its own lights, so no shared pseudo-inverse.
   const bool all = options.shadow_threshold < 0 && options.t_low >= 1.0 && !observations.near;
+  if (options.confidence && !all) maps.predicted_error = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));
   const Counters counters =
       all ? solve_all(observations, options, maps) : solve_selected(observations, options, maps);
 
@@ -244,6 +269,7 @@ SolveResult solve_lambertian(const Observations& observations, const L2Options& 
   result.albedo = maps.albedo;
   result.residual = maps.residual;
   result.solved = maps.solved;
+  result.predicted_error = maps.predicted_error;
   result.parameters = options.to_json();
   SolveSummary& summary = result.summary;
   summary.method = "l2";

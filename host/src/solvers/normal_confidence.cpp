@@ -22,30 +22,22 @@ namespace {
 // eigenvalue) leave the normal undetermined.
 constexpr double kMinEigenvalueRatio = 1e-6;
 
-// A pixel's working arrays, kept from pixel to pixel.
-struct Scratch {
-  Eigen::VectorXd shading;        // images: lᵀn
-  Eigen::VectorXd misfit;         // images: |v − ρ lᵀn|, the Lambertian residual's size
-  std::vector<std::uint8_t> lit;  // images: lit and facing the answer
-  Eigen::MatrixX3d inlier_lights, weighted_lights;  // the inliers' l and |r| l, in their first rows
-  Eigen::VectorXd inlier_values, inlier_weights;    // the inliers' v and |r|
-  std::vector<double> magnitude;  // the lit lights' |residual| first, reordered to find the median
-};
+}  // namespace
 
-double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, double albedo,
-                     const ConfidenceOptions& options, Scratch& scratch) {
+double PixelErrorPredictor::predict(const PixelObservations& data, const Eigen::Vector3d& n, double albedo) {
+  const ConfidenceOptions& options = options_;
   const double infinite = std::numeric_limits<double>::infinity();
   if (!(albedo > 0 && std::isfinite(albedo))) return infinite;
   const Eigen::Index images = data.count();
-  scratch.shading.noalias() = data.lights * n;
-  scratch.misfit = (data.values - albedo * scratch.shading).cwiseAbs();
-  if (scratch.inlier_lights.rows() < images) {
-    scratch.lit.resize(static_cast<std::size_t>(images));
-    scratch.magnitude.resize(static_cast<std::size_t>(images));
-    scratch.inlier_lights.resize(images, 3);
-    scratch.weighted_lights.resize(images, 3);
-    scratch.inlier_values.resize(images);
-    scratch.inlier_weights.resize(images);
+  shading_.noalias() = data.lights * n;
+  misfit_ = (data.values - albedo * shading_).cwiseAbs();
+  if (inlier_lights_.rows() < images) {
+    lit_.resize(static_cast<std::size_t>(images));
+    magnitude_.resize(static_cast<std::size_t>(images));
+    inlier_lights_.resize(images, 3);
+    weighted_lights_.resize(images, 3);
+    inlier_values_.resize(images);
+    inlier_weights_.resize(images);
   }
   // Written whatever the test says, kept by advancing: no branch to mispredict.
   std::size_t lit = 0;
@@ -53,10 +45,10 @@ double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, do
   for (Eigen::Index j = 0; j < images; ++j) {
     const double value = data.values(j);
     // Lit, and not from behind the answer (the model has no slope there).
-    const bool counted = data.usable[static_cast<std::size_t>(j)] && value > options.shadow_threshold &&
-                         scratch.shading(j) > 0;
-    scratch.lit[static_cast<std::size_t>(j)] = counted;
-    scratch.magnitude[lit] = scratch.misfit(j);
+    const bool counted =
+        data.usable[static_cast<std::size_t>(j)] && value > options.shadow_threshold && shading_(j) > 0;
+    lit_[static_cast<std::size_t>(j)] = counted;
+    magnitude_[lit] = misfit_(j);
     lit += counted ? 1 : 0;
     lit_sum += counted ? value : 0.0;
   }
@@ -67,24 +59,24 @@ double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, do
   const auto half = static_cast<std::ptrdiff_t>(lit / 2);
   const double cut = lit == 3
                          ? infinite
-                         : std::max(floor, options.trim * select_kth(scratch.magnitude.data(),
+                         : std::max(floor, options.trim * select_kth(magnitude_.data(),
                                                                      static_cast<std::ptrdiff_t>(lit), half));
   // The inliers' lights, their values and their residuals' magnitudes (floored), packed.
   Eigen::Index inliers = 0;
   for (Eigen::Index j = 0; j < images; ++j) {
-    const double magnitude = scratch.misfit(j);
-    scratch.inlier_lights.row(inliers) = data.lights.row(j);
-    scratch.inlier_values(inliers) = data.values(j);
-    scratch.inlier_weights(inliers) = std::max(magnitude, floor);
-    inliers += scratch.lit[static_cast<std::size_t>(j)] && magnitude <= cut ? 1 : 0;
+    const double magnitude = misfit_(j);
+    inlier_lights_.row(inliers) = data.lights.row(j);
+    inlier_values_(inliers) = data.values(j);
+    inlier_weights_(inliers) = std::max(magnitude, floor);
+    inliers += lit_[static_cast<std::size_t>(j)] && magnitude <= cut ? 1 : 0;
   }
   if (inliers < 3) return infinite;
-  const auto lights = scratch.inlier_lights.topRows(inliers);
-  scratch.weighted_lights.topRows(inliers) = scratch.inlier_weights.head(inliers).asDiagonal() * lights;
-  const auto weighted = scratch.weighted_lights.topRows(inliers);
-  const Eigen::Matrix3d gram = lights.transpose().lazyProduct(lights);                      // Σ l lᵀ
-  const Eigen::Matrix3d meat = weighted.transpose().lazyProduct(weighted);                  // Σ r² l lᵀ
-  const Eigen::Vector3d moment = lights.transpose() * scratch.inlier_values.head(inliers);  // Σ v l
+  const auto lights = inlier_lights_.topRows(inliers);
+  weighted_lights_.topRows(inliers) = inlier_weights_.head(inliers).asDiagonal() * lights;
+  const auto weighted = weighted_lights_.topRows(inliers);
+  const Eigen::Matrix3d gram = lights.transpose().lazyProduct(lights);               // Σ l lᵀ
+  const Eigen::Matrix3d meat = weighted.transpose().lazyProduct(weighted);           // Σ r² l lᵀ
+  const Eigen::Vector3d moment = lights.transpose() * inlier_values_.head(inliers);  // Σ v l
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
   eigen.computeDirect(gram);
   const Eigen::Vector3d lambda = eigen.eigenvalues();
@@ -100,7 +92,12 @@ double predict_pixel(const PixelObservations& data, const Eigen::Vector3d& n, do
   return std::hypot(spread, disagreement);
 }
 
-}  // namespace
+bool judged_normal(const cv::Vec3f& stored, Eigen::Vector3d& n) {
+  n = Eigen::Vector3d(stored[0], stored[1], stored[2]);
+  if (!(n.norm() > 0.5)) return false;
+  n.normalize();
+  return true;
+}
 
 void ConfidenceOptions::check() const {
   if (!(std::isfinite(shadow_threshold) && shadow_threshold >= 0))
@@ -132,21 +129,19 @@ cv::Mat predict_normal_error(const Observations& observations, const SolveResult
     fail("predict_normal_error: result maps are {}x{}, observations {}x{}", result.normals.cols,
          result.normals.rows, observations.size.width, observations.size.height);
   cv::Mat error(observations.size, CV_32FC1, cv::Scalar::all(0));
-  parallel_chunks(observations.pixel_count(), options.threads,
-                  [&](std::size_t, std::size_t begin, std::size_t end) {
-                    PixelObservations data;
-                    Scratch scratch;
-                    for (std::size_t p = begin; p < end; ++p) {
-                      const cv::Point& at = observations.pixels[p];
-                      if (result.solved.at<std::uint8_t>(at) == 0) continue;
-                      const cv::Vec3f& normal = result.normals.at<cv::Vec3f>(at);
-                      const Eigen::Vector3d n(normal[0], normal[1], normal[2]);
-                      if (!(n.norm() > 0.5)) continue;
-                      load_pixel(observations, p, true, data);
-                      error.at<float>(at) = static_cast<float>(
-                          predict_pixel(data, n.normalized(), result.albedo.at<float>(at), options, scratch));
-                    }
-                  });
+  parallel_chunks(
+      observations.pixel_count(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+        PixelObservations data;
+        PixelErrorPredictor predictor(options);
+        Eigen::Vector3d n;
+        for (std::size_t p = begin; p < end; ++p) {
+          const cv::Point& at = observations.pixels[p];
+          if (result.solved.at<std::uint8_t>(at) == 0) continue;
+          if (!judged_normal(result.normals.at<cv::Vec3f>(at), n)) continue;
+          load_pixel(observations, p, true, data);
+          error.at<float>(at) = static_cast<float>(predictor.predict(data, n, result.albedo.at<float>(at)));
+        }
+      });
   return error;
 }
 

@@ -30,17 +30,22 @@ void check_observations(const Observations& observations, const char* who) {
 
 void load_pixel(const Observations& observations, std::size_t pixel, bool drop_saturated,
                 PixelObservations& out) {
-  const auto row = static_cast<Eigen::Index>(pixel);
-  const Eigen::Index images = observations.intensities.cols();
-  out.values = observations.intensities.row(row).transpose().cast<double>();
   if (observations.near) {
     near_light_directions(*observations.near, pixel, out.lights, out.near_gains);
-    // The LED is brighter (gain > 1) when closer: divide to get the value at unit light.
-    out.values = out.values.cwiseQuotient(out.near_gains);
   } else {
     out.lights = observations.lights;
     out.near_gains.resize(0);
   }
+  load_pixel_values(observations, pixel, drop_saturated, out);
+}
+
+void load_pixel_values(const Observations& observations, std::size_t pixel, bool drop_saturated,
+                       PixelObservations& out) {
+  const auto row = static_cast<Eigen::Index>(pixel);
+  const Eigen::Index images = observations.intensities.cols();
+  out.values = observations.intensities.row(row).transpose().cast<double>();
+  // The LED is brighter (gain > 1) when closer: divide to get the value at unit light.
+  if (out.near_lights()) out.values = out.values.cwiseQuotient(out.near_gains);
   out.usable.assign(static_cast<std::size_t>(images), 1);
   const bool flags = observations.saturated.size() != 0;
   for (Eigen::Index j = 0; j < images; ++j) {

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+
 namespace lightstage {
 namespace {
 
@@ -17,6 +19,11 @@ std::string join_texts(const std::vector<SolveFact>& facts) {
 }
 
 }  // namespace
+
+cv::Vec3f on_horizon(const cv::Vec3f& n) {
+  const float horizontal = std::hypot(n[0], n[1]);
+  return horizontal > 1e-6f ? cv::Vec3f(n[0] / horizontal, n[1] / horizontal, 0.f) : cv::Vec3f(0.f, 0.f, 1.f);
+}
 
 std::string SolveSummary::format_message() const {
   std::string line = method;

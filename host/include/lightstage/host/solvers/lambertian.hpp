@@ -8,9 +8,12 @@
 // are (nearly) coplanar, or whose solution is zero, are rejected, not guessed.
 
 #include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/solvers/normal_confidence.hpp"
 #include "lightstage/host/solvers/solve_result.hpp"
 
 #include <nlohmann/json.hpp>
+
+#include <optional>
 
 namespace lightstage {
 
@@ -25,6 +28,10 @@ struct L2Options {
   // Worker threads over pixels; 0 = hardware concurrency. Results do not depend on it.
   int threads = 0;
   SolveProgress progress;  // pixels done (solve_result.hpp); not part of to_json()
+  // When set, each pixel solved one at a time (near lights, a threshold or
+  // t_low < 1) also gets the confidence's predicted error at its answer, in
+  // SolveResult::predicted_error; not part of to_json() (solve_with records it).
+  std::optional<ConfidenceOptions> confidence;
 
   // Throws InputError naming the broken field and value.
   void check() const;

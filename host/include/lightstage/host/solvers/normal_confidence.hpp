@@ -19,10 +19,15 @@
 // ConfidenceOptions::scale_deg, so e = s (1/c − 1) reads it back.
 
 #include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/solvers/pixel_observations.hpp"
 #include "lightstage/host/solvers/solve_result.hpp"
 
+#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
+
+#include <cstdint>
+#include <vector>
 
 namespace lightstage {
 
@@ -36,6 +41,30 @@ struct ConfidenceOptions {
   void check() const;  // throws InputError naming the field and value
   nlohmann::json to_json() const;
 };
+
+// One pixel's predicted error in degrees at the answer (n unit, ρ = albedo),
+// for a solver that has the pixel's data at hand (l2 with near lights, whose
+// directions are worth computing once); +inf where fewer than three inliers
+// remain or they are coplanar. Keeps its working arrays from pixel to pixel:
+// one per thread.
+class PixelErrorPredictor {
+ public:
+  explicit PixelErrorPredictor(const ConfidenceOptions& options) : options_(options) {}
+  double predict(const PixelObservations& data, const Eigen::Vector3d& n, double albedo);
+
+ private:
+  ConfidenceOptions options_;
+  Eigen::VectorXd shading_;        // images: lᵀn
+  Eigen::VectorXd misfit_;         // images: |v − ρ lᵀn|, the Lambertian residual's size
+  std::vector<std::uint8_t> lit_;  // images: lit and facing the answer
+  Eigen::MatrixX3d inlier_lights_, weighted_lights_;  // the inliers' l and |r| l, in their first rows
+  Eigen::VectorXd inlier_values_, inlier_weights_;    // the inliers' v and |r|
+  std::vector<double> magnitude_;  // the lit lights' |residual| first, reordered to find the median
+};
+
+// The unit normal the confidence judges for a solved pixel: the stored one,
+// or none (false) when it is not a normal.
+bool judged_normal(const cv::Vec3f& stored, Eigen::Vector3d& n);
 
 // Predicted angular error in degrees (CV_32FC1, the result's size) for every
 // solved pixel of `result`; +inf where fewer than three inliers remain or

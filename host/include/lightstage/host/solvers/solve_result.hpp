@@ -59,6 +59,10 @@ struct SolveSummary {
   nlohmann::json to_json() const;
 };
 
+// A normal facing away from the camera (z < 0) as every solve reports it: on
+// the horizon in its own azimuth, or the view axis when it has none.
+cv::Vec3f on_horizon(const cv::Vec3f& n);
+
 struct SolveResult {
   cv::Mat normals;   // CV_32FC3 (x, y, z), unit where solved, zero elsewhere
   cv::Mat albedo;    // CV_32FC1, zero where not solved
@@ -66,6 +70,9 @@ struct SolveResult {
   cv::Mat solved;    // CV_8UC1, 255 where solved
   // Optional per-pixel outputs (empty when a method does not produce them):
   cv::Mat confidence;  // CV_32FC1 in [0, 1] from the predicted error (normal_confidence.hpp; solve_with)
+  // CV_32FC1, degrees: the error a solver predicted itself at its answer, on the horizon where it faced
+  // away (l2 with near lights, L2Options::confidence); solve_with makes `confidence` of it.
+  cv::Mat predicted_error;
   // Colour stacks: CV_32FC3 (b, g, r, OpenCV's order) chroma of radiometry.hpp,
   // the colour albedo being albedo · chroma; 0 where not solved (solve_with).
   cv::Mat chroma;
