@@ -750,7 +750,9 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
     claim_page_folder(pyramid_dir);
     sources.pyramid_dir = pyramid_dir;
     sources.pyramid.format = options.pyramid_format;
-    sources.pyramid.threads = options.threads;
+    // Every core even when the sections take one at a time: a tile row is held
+    // whatever the threads, and each tile's encoding needs only its own few hundred kB.
+    sources.pyramid.threads = 0;
   }
   sources.albedo_scale = in.summary.value(
       folder.has_albedo() && folder.has_chroma() ? "albedo_rgb_png_scale" : "albedo_png_scale", 0.0);
