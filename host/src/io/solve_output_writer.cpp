@@ -325,17 +325,26 @@ nlohmann::json SolveOutputWriter::finish(const SolveResult& result, const fs::pa
     return std::isfinite(value) && value > 0 ? value : 1.0;
   };
   const auto write_png16_of = [&](const fs::path& file, const fs::path& png, int channels, double scale) {
-    const auto writer = open_png_writer(png, size_, CV_MAKETYPE(CV_16U, channels));
+    auto writer = open_png_writer(png, size_, CV_MAKETYPE(CV_16U, channels));
     read_back(file, [&](const cv::Mat& rows, int) { writer->write(png16(rows, scale)); });
-    commit(*writer);
+    return writer;
   };
-  const double scale = white(albedo_white_, dir_ / "albedo.pfm", 1);
-  write_png16_of(dir_ / "albedo.pfm", dir_ / "albedo.png", 1, scale);
-  double colour_scale = scale;
-  if (colour_) {
-    colour_scale = white(colour_white_, dir_ / "albedo_rgb.pfm", 3);
-    write_png16_of(dir_ / "albedo_rgb.pfm", dir_ / "albedo_rgb.png", 3, colour_scale);
-  }
+  // The grey and colour PNGs side by side (each reads back its own float map), committed in order after.
+  double scale = 1, colour_scale = 1;
+  std::unique_ptr<RowWriter> albedo_png, colour_png;
+  std::vector<std::function<void()>> pngs;
+  pngs.emplace_back([&] {
+    scale = white(albedo_white_, dir_ / "albedo.pfm", 1);
+    albedo_png = write_png16_of(dir_ / "albedo.pfm", dir_ / "albedo.png", 1, scale);
+  });
+  if (colour_)
+    pngs.emplace_back([&] {
+      colour_scale = white(colour_white_, dir_ / "albedo_rgb.pfm", 3);
+      colour_png = write_png16_of(dir_ / "albedo_rgb.pfm", dir_ / "albedo_rgb.png", 3, colour_scale);
+    });
+  parallel_invoke(pngs, 0);
+  commit(*albedo_png);
+  if (colour_png) commit(*colour_png);
 
   nlohmann::json summary = result.summary.to_json();
   summary["parameters"] = result.parameters;
