@@ -1,11 +1,13 @@
 // Speed of every `solve --method` on one stack, in one run: pixels per second
 // at 2 threads, with l2 and a plain read of the observation matrix (the floor
 // any solver pays) as the yardsticks, the radiometry that builds that matrix
-// from the frames, and the confidence every result gets. The stack: a
+// from the frames, and the confidence every result gets (and l2's own under
+// near lights). The stack: a
 // simulated Cook–Torrance sphere under the 96-LED default dome (distant
 // lights), 192x192.
 //   build/bench/bench_photometric --benchmark_counters_tabular=true
 #include "lightstage/common/rig.hpp"
+#include "lightstage/host/near_lights.hpp"
 #include "lightstage/host/radiometry.hpp"
 #include "lightstage/host/reflectance/bipolynomial_model.hpp"
 #include "lightstage/host/solvers/auto.hpp"
@@ -109,6 +111,53 @@ void BM_L2(benchmark::State& state) {
   report(state);
 }
 BENCHMARK(BM_L2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The stack under near lights (the rig's LEDs, the surface on the plane z = 0,
+// 0.2 mm a pixel): l2 solves it pixel by pixel, each with its own directions.
+const Observations& near_stack() {
+  static const Observations observations = [] {
+    Observations near = stack();
+    const Rig rig = load_rig(default_rig_path());
+    NearLights lights;
+    lights.led_positions_mm.resize(static_cast<Eigen::Index>(rig.leds.size()), 3);
+    for (std::size_t j = 0; j < rig.leds.size(); ++j)
+      lights.led_positions_mm.row(static_cast<Eigen::Index>(j)) = rig.leds[j].position_mm.transpose();
+    lights.object_centre_mm = rig.object_position_mm;
+    lights.points_mm.resize(static_cast<Eigen::Index>(near.pixel_count()), 3);
+    for (std::size_t p = 0; p < near.pixel_count(); ++p)
+      lights.points_mm.row(static_cast<Eigen::Index>(p)) << 0.2 * (near.pixels[p].x - near.size.width / 2),
+          0.2 * (near.pixels[p].y - near.size.height / 2), 0.0;
+    near.near = lights;
+    return near;
+  }();
+  return observations;
+}
+
+// l2 under near lights and then the confidence's separate pass, as every
+// other method's result gets it; against BM_L2NearPredicting, the same
+// numbers with each pixel's directions computed once.
+void BM_L2NearThenConfidence(benchmark::State& state) {
+  L2Options l2;
+  l2.threads = kThreads;
+  ConfidenceOptions confidence;
+  confidence.threads = kThreads;
+  for (auto _ : state) {
+    const SolveResult result = solve_lambertian(near_stack(), l2);
+    benchmark::DoNotOptimize(predict_normal_error(near_stack(), result, confidence));
+  }
+  report(state);
+}
+BENCHMARK(BM_L2NearThenConfidence)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_L2NearPredicting(benchmark::State& state) {
+  L2Options l2;
+  l2.threads = kThreads;
+  l2.confidence = ConfidenceOptions{};
+  l2.confidence->threads = kThreads;
+  for (auto _ : state) benchmark::DoNotOptimize(solve_lambertian(near_stack(), l2));
+  report(state);
+}
+BENCHMARK(BM_L2NearPredicting)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The confidence every method's result gets (solve_with), here of l2's.
 void BM_Confidence(benchmark::State& state) {

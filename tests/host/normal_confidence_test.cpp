@@ -205,16 +205,23 @@ SolveResult facing_the_camera(SolveResult result) {
 
 // l2 solving one pixel at a time predicts each error while it has the pixel's
 // lights: the same floats as the separate pass over the solved (and clamped)
-// answer, with near lights, saturated observations and a normal facing away.
+// answer, with near lights, a threshold or T_low, saturated observations, a
+// pixel never lit and a normal facing away.
 TEST(NormalConfidence, L2PredictsAsItSolvesWhatTheSeparatePassPredicts) {
-  for (const bool near : {true, false}) {
-    SCOPED_TRACE(near ? "near lights" : "distant lights");
+  struct Case {
+    const char* name;
+    bool near;
+    double shadow_threshold, t_low;
+  };
+  for (const Case& c : {Case{"near lights", true, -1, 1}, Case{"a threshold", false, 0.02, 1},
+                        Case{"T_low", false, -1, 0.75}}) {
+    SCOPED_TRACE(c.name);
     SyntheticScene scene = make_scene(12, 10, 24, 8, /*clamp_shadows=*/true);
     Observations& observations = scene.observations;
     add_noise(observations, 0.01, 9);
     for (Eigen::Index p = 0; p < observations.intensities.rows(); p += 7)
       observations.saturated(p, p % 24) = true;
-    if (near) {
+    if (c.near) {
       NearLights lights;
       lights.led_positions_mm = 400.0 * observations.lights;
       lights.points_mm = Eigen::MatrixX3d::Zero(observations.intensities.rows(), 3);
@@ -223,19 +230,23 @@ TEST(NormalConfidence, L2PredictsAsItSolvesWhatTheSeparatePassPredicts) {
             observations.pixels[p].y, 0;
       observations.near = lights;
     }
-    // Pixel 0 is exactly Lambertian for a normal below the horizon, negative values and all.
+    // Pixel 0 is exactly Lambertian for a normal below the horizon, negative values and all; pixel 1 is dark.
     const Vec3 away = Vec3(0.8, 0.3, -0.5).normalized();
-    for (Eigen::Index j = 0; j < observations.intensities.cols(); ++j)
+    for (Eigen::Index j = 0; j < observations.intensities.cols(); ++j) {
       observations.intensities(0, j) = static_cast<float>(0.6 * observations.lights.row(j).dot(away));
+      observations.intensities(1, j) = 0;
+    }
     ConfidenceOptions confidence;
     confidence.shadow_threshold = 0.02;
     L2Options options;
-    options.shadow_threshold = near ? -1 : 0.02;  // one pixel at a time either way
+    options.shadow_threshold = c.shadow_threshold;
+    options.t_low = c.t_low;
     options.threads = 2;
     options.confidence = confidence;
     const SolveResult predicting = solve_lambertian(observations, options);
     ASSERT_FALSE(predicting.predicted_error.empty());
-    EXPECT_LT(predicting.normals.at<cv::Vec3f>(0, 0)[2], 0.0f);
+    EXPECT_LT(predicting.normals.at<cv::Vec3f>(observations.pixels[0])[2], 0.0f);
+    EXPECT_EQ(predicting.solved.at<std::uint8_t>(observations.pixels[1]), 0);
     const cv::Mat separate = predict_normal_error(observations, facing_the_camera(predicting), confidence);
     int finite = 0;
     for (const cv::Point& at : observations.pixels) {
@@ -248,6 +259,15 @@ TEST(NormalConfidence, L2PredictsAsItSolvesWhatTheSeparatePassPredicts) {
     options.confidence.reset();
     EXPECT_TRUE(solve_lambertian(observations, options).predicted_error.empty());
   }
+  // Every pixel sharing one pseudo-inverse predicts nothing: the separate pass judges them.
+  SyntheticScene scene = make_scene(4, 4, 12, 3, /*clamp_shadows=*/false);
+  L2Options all;
+  all.confidence = ConfidenceOptions{};
+  EXPECT_TRUE(solve_lambertian(scene.observations, all).predicted_error.empty());
+  // The confidence reads the saturation flags: flags of another size are an input error, not a bad read.
+  scene.observations.saturated = FlagMatrix::Constant(3, 12, false);
+  all.shadow_threshold = 0;
+  EXPECT_THROW(solve_lambertian(scene.observations, all), InputError);
 }
 
 TEST(NormalConfidence, RefusesOptionsOutOfRangeNamingTheField) {

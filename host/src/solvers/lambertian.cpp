@@ -2,6 +2,7 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/parallel.hpp"
+#include "lightstage/host/solvers/normal_confidence.hpp"
 #include "lightstage/host/solvers/pixel_observations.hpp"
 #include "solvers/pixel_driver.hpp"
 
@@ -105,8 +106,9 @@ Counters solve_all(const Observations& obs, const L2Options& options, Maps& maps
 }
 
 // The confidence's predicted error at the answer just stored for pixel `p`,
-// judged as predict_normal_error judges it: on the horizon where it faced
-// away. `data` holds the pixel's lights (and near gains) already.
+// at the normal predict_normal_error would judge after the solve's clamp
+// (on the horizon where it faced away, clamp_facing_away). `data` holds the
+// pixel's lights (and near gains) already.
 float predicted_error(const Observations& obs, std::size_t p, const Maps& maps, PixelObservations& data,
                       PixelErrorPredictor& predictor) {
   const cv::Point at = obs.pixels[p];
@@ -251,6 +253,10 @@ SolveResult solve_lambertian(const Observations& observations, const L2Options& 
   Maps maps{cv::Mat(size, CV_32FC3, cv::Scalar::all(0)), cv::Mat(size, CV_32FC1, cv::Scalar::all(0)),
             cv::Mat(size, CV_32FC1, cv::Scalar::all(0)), cv::Mat(size, CV_8UC1, cv::Scalar::all(0)),
             cv::Mat()};
+  if (options.confidence) {
+    options.confidence->check();
+    check_observations(observations, "solve_lambertian");  // the saturation flags the confidence reads
+  }
   if (observations.near &&
       (observations.near->image_count() != observations.image_count() ||
        static_cast<std::size_t>(observations.near->points_mm.rows()) != observations.pixel_count())) {

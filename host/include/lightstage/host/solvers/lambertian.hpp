@@ -8,7 +8,7 @@
 // are (nearly) coplanar, or whose solution is zero, are rejected, not guessed.
 
 #include "lightstage/host/radiometry.hpp"
-#include "lightstage/host/solvers/normal_confidence.hpp"
+#include "lightstage/host/solvers/confidence_options.hpp"
 #include "lightstage/host/solvers/solve_result.hpp"
 
 #include <nlohmann/json.hpp>
@@ -30,7 +30,9 @@ struct L2Options {
   SolveProgress progress;  // pixels done (solve_result.hpp); not part of to_json()
   // When set, each pixel solved one at a time (near lights, a threshold or
   // t_low < 1) also gets the confidence's predicted error at its answer, in
-  // SolveResult::predicted_error; not part of to_json() (solve_with records it).
+  // SolveResult::predicted_error (empty when every pixel shares one
+  // pseudo-inverse); its time counts in the summary's seconds. Not part of
+  // to_json() (solve_with records it).
   std::optional<ConfidenceOptions> confidence;
 
   // Throws InputError naming the broken field and value.

@@ -19,6 +19,7 @@
 // ConfidenceOptions::scale_deg, so e = s (1/c − 1) reads it back.
 
 #include "lightstage/host/radiometry.hpp"
+#include "lightstage/host/solvers/confidence_options.hpp"
 #include "lightstage/host/solvers/pixel_observations.hpp"
 #include "lightstage/host/solvers/solve_result.hpp"
 
@@ -31,21 +32,11 @@
 
 namespace lightstage {
 
-struct ConfidenceOptions {
-  double shadow_threshold = 0;       // observations at or below it are not lit (the solve's threshold)
-  double scale_deg = 1.0;            // s: the predicted error at which confidence is 0.5
-  double trim = 2.0;                 // inliers: |r| at most this many times the median |r|
-  double min_relative_sigma = 1e-3;  // |r| floor, relative to the pixel's mean lit value (quantisation)
-  int threads = 0;                   // 0 = hardware concurrency
-
-  void check() const;  // throws InputError naming the field and value
-  nlohmann::json to_json() const;
-};
-
 // One pixel's predicted error in degrees at the answer (n unit, ρ = albedo),
-// for a solver that has the pixel's data at hand (l2 with near lights, whose
-// directions are worth computing once); +inf where fewer than three inliers
-// remain or they are coplanar. Keeps its working arrays from pixel to pixel:
+// for a solver that has the pixel's data at hand (l2 solving pixel by pixel:
+// a near light's directions are worth computing once); +inf where the albedo
+// is not positive and finite, fewer than three inliers remain or they are
+// coplanar. Keeps its working arrays from pixel to pixel:
 // one per thread.
 class PixelErrorPredictor {
  public:
