@@ -381,6 +381,44 @@ TEST(SolveFolderRows, BandsReadBackWhatTheWholeReadGives) {
   EXPECT_LT(cv::norm(solved_rows, exact, cv::NORM_INF), 1e-6);
 }
 
+TEST(SolveFolderRows, ALaterPassTakesTheSolvedMaskAndDecodesOnlyTheMapsItWants) {
+  const cv::Size size(200, 160);
+  const fs::path dir = lightstage::testing::scratch_dir() / "result";
+  SolveResult result = full_result(size);
+  result.coefficients = cv::Mat();  // no reflectance model
+  result.reflectance = nlohmann::json();
+  io::write_solve_outputs(dir, result, "/in");
+  const io::SolveFolder whole = io::read_solve_folder(dir);
+  io::SolveFolderRows rows(dir);
+  {
+    // normal.png damaged past its first few kB, after it was opened: decoding its rows fails.
+    const auto bytes = static_cast<std::streamoff>(fs::file_size(dir / "normal.png"));
+    ASSERT_GT(bytes, 65536);
+    std::fstream png(dir / "normal.png", std::ios::in | std::ios::out | std::ios::binary);
+    png.seekp(16384);
+    const std::string zeros(static_cast<std::size_t>(bytes - 16384), '\0');
+    png.write(zeros.data(), static_cast<std::streamsize>(zeros.size()));
+  }
+  const cv::Range r(100, 160);
+  io::SolveFolderRows::Wanted wanted;
+  wanted.albedo = wanted.colour = wanted.confidence = wanted.coefficients = false;
+  const io::SolveFolder band = rows.read(r.start, r.size(), wanted, whole.solved.rowRange(r));
+  EXPECT_EQ(cv::norm(band.normals, whole.normals.rowRange(r), cv::NORM_INF), 0) << "normal.exr's";
+  EXPECT_EQ(cv::norm(band.solved, whole.solved.rowRange(r), cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(band.residual, whole.residual.rowRange(r), cv::NORM_INF), 0);
+  EXPECT_TRUE(band.albedo.empty() && band.chroma.empty() && band.confidence.empty());
+  wanted.normals = false;
+  wanted.colour = true;  // the chroma is the colour albedo over the grey: both read
+  const io::SolveFolder maps = rows.read(r.start, r.size(), wanted, whole.solved.rowRange(r));
+  EXPECT_TRUE(maps.normals.empty());
+  EXPECT_EQ(cv::norm(maps.albedo, whole.albedo.rowRange(r), cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(maps.chroma, whole.chroma.rowRange(r), cv::NORM_INF), 0);
+  // Without the mask the rows of normal.png are decoded again, and the damage shows.
+  io::SolveFolderRows again(dir);
+  EXPECT_THROW(again.read(r.start, r.size(), wanted), InputError);
+  EXPECT_THROW(rows.read(0, 10, wanted, whole.solved.rowRange(0, 9)), std::logic_error);
+}
+
 TEST(BandQuantile, EqualsNthElementOverEveryValueWhateverTheirSign) {
   cv::RNG rng(3);
   for (const int n : {1, 2, 17, 5000}) {

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <fstream>
 #include <functional>
+#include <stdexcept>
 #include <vector>
 
 namespace lightstage::io {
@@ -147,52 +148,63 @@ std::size_t SolveFolderRows::bytes_per_pixel() const {
   return bytes;
 }
 
-SolveFolder SolveFolderRows::read(int y0, int rows) {
+SolveFolder SolveFolderRows::read(int y0, int rows, const Wanted& wanted, const cv::Mat& solved) {
+  if (!solved.empty() && (solved.type() != CV_8UC1 || solved.rows != rows || solved.cols != size_.width))
+    throw std::logic_error(
+        fmt::format("SolveFolderRows::read: the solved mask is not {} rows of {}", rows, size_.width));
   SolveFolder band = facts_;
+  const bool exact_normals = wanted.normals && normal_exr_;
+  const bool decode_png = solved.empty() || (wanted.normals && !normal_exr_);
   // Each file decodes beside the others (normal.png and normal.exr are most of the work).
   DecodedNormals normals;
   cv::Mat exact;
   std::vector<std::function<void()>> files;
-  files.emplace_back([&] {
-    cv::Mat encoded;
-    normal_png_->read(y0, rows, encoded);
-    normals = decode_normal_map(encoded, normal_png_->path().string());
-  });
-  if (normal_exr_) files.emplace_back([&] { normal_exr_->read(y0, rows, exact); });
-  files.emplace_back([&] { read_maps(y0, rows, band); });
+  if (decode_png)
+    files.emplace_back([&] {
+      cv::Mat encoded;
+      normal_png_->read(y0, rows, encoded);
+      normals = decode_normal_map(encoded, normal_png_->path().string());
+    });
+  if (exact_normals) files.emplace_back([&] { normal_exr_->read(y0, rows, exact); });
+  files.emplace_back([&] { read_maps(y0, rows, wanted, band); });
   parallel_invoke(files, 0);
-  band.normals = normals.normals;
-  band.solved = normals.valid;
-  if (normal_exr_) {
+  band.solved = decode_png ? normals.valid : solved;
+  if (exact_normals) {
     band.normals = cv::Mat(band.solved.size(), CV_32FC3, cv::Scalar::all(0));
     exact.copyTo(band.normals, band.solved);
+  } else if (wanted.normals) {
+    band.normals = normals.normals;
   }
   return band;
 }
 
-void SolveFolderRows::read_maps(int y0, int rows, SolveFolder& band) {
-  if (albedo_pfm_) {
-    albedo_pfm_->read(y0, rows, band.albedo);
-  } else if (albedo_png_) {
-    cv::Mat png;
-    albedo_png_->read(y0, rows, png);
-    png.convertTo(band.albedo, CV_32FC1, facts_.albedo_png_scale / (png.depth() == CV_16U ? 65535.0 : 255.0));
+void SolveFolderRows::read_maps(int y0, int rows, const Wanted& wanted, SolveFolder& band) {
+  const bool colour = wanted.colour && colour_;
+  if (wanted.albedo || colour) {
+    if (albedo_pfm_) {
+      albedo_pfm_->read(y0, rows, band.albedo);
+    } else if (albedo_png_) {
+      cv::Mat png;
+      albedo_png_->read(y0, rows, png);
+      png.convertTo(band.albedo, CV_32FC1,
+                    facts_.albedo_png_scale / (png.depth() == CV_16U ? 65535.0 : 255.0));
+    }
   }
-  if (colour_) {
+  if (colour) {
     // The colour albedo over the grey albedo: the chroma (neutral where the albedo is 0).
-    cv::Mat colour;
-    colour_->read(y0, rows, colour);
-    band.chroma = cv::Mat(colour.size(), CV_32FC3, cv::Scalar::all(1));
-    for (int y = 0; y < colour.rows; ++y) {
-      for (int x = 0; x < colour.cols; ++x) {
+    cv::Mat colour_albedo;
+    colour_->read(y0, rows, colour_albedo);
+    band.chroma = cv::Mat(colour_albedo.size(), CV_32FC3, cv::Scalar::all(1));
+    for (int y = 0; y < colour_albedo.rows; ++y) {
+      for (int x = 0; x < colour_albedo.cols; ++x) {
         const float a = band.albedo.at<float>(y, x);
-        if (a > 0) band.chroma.at<cv::Vec3f>(y, x) = colour.at<cv::Vec3f>(y, x) / a;
+        if (a > 0) band.chroma.at<cv::Vec3f>(y, x) = colour_albedo.at<cv::Vec3f>(y, x) / a;
       }
     }
   }
-  if (residual_) residual_->read(y0, rows, band.residual);
-  if (confidence_) confidence_->read(y0, rows, band.confidence);
-  if (!coefficients_.empty()) {
+  if (wanted.residual && residual_) residual_->read(y0, rows, band.residual);
+  if (wanted.confidence && confidence_) confidence_->read(y0, rows, band.confidence);
+  if (wanted.coefficients && !coefficients_.empty()) {
     std::vector<cv::Mat> planes(coefficients_.size());
     for (std::size_t i = 0; i < planes.size(); ++i) coefficients_[i]->read(y0, rows, planes[i]);
     cv::merge(planes, band.coefficients);

@@ -111,10 +111,15 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   std::optional<io::SolveFolder> kept_maps;
   cv::Mat kept_depth;
   std::optional<AngularErrorMap> kept_error;
-  const auto read_maps = [&](int y0, int rows) {
-    if (!one_band) return folder.read(y0, rows);
-    if (!kept_maps) kept_maps = folder.read(y0, rows);
-    return *kept_maps;
+  cv::Mat solved(size, CV_8UC1);  // filled by the first pass
+  // The first pass reads every map; the later ones only the maps they use, and
+  // the solved mask from the first (normal.png then needs no decoding beside normal.exr).
+  const auto read_maps = [&](int y0, int rows, const io::SolveFolderRows::Wanted* later) {
+    if (one_band) {
+      if (!kept_maps) kept_maps = folder.read(y0, rows);
+      return *kept_maps;
+    }
+    return later ? folder.read(y0, rows, *later, solved.rowRange(y0, y0 + rows)) : folder.read(y0, rows);
   };
   const auto read_depth = [&](int y0, int rows) {
     if (one_band && !kept_depth.empty()) return kept_depth;
@@ -126,7 +131,6 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
 
   // Pass 1: the viewer's model, the error's statistics, the quantiles counted.
   SurfaceModelBuilder viewer(folder, sources.viewer_max_pixels, notes);
-  cv::Mat solved(size, CV_8UC1);
   MapQuantile albedo_q(0.995), residual_q(0.99), depth_median(0.5), error_q(0.95);
   float depth_low = std::numeric_limits<float>::infinity(), depth_high = -depth_low;
   AngularErrorAccumulator errors;
@@ -145,7 +149,7 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
     return map;
   };
   for_each_band([&](int y0, int rows) {
-    const io::SolveFolder band = read_maps(y0, rows);
+    const io::SolveFolder band = read_maps(y0, rows, nullptr);
     viewer.add(band, y0);
     band.solved.copyTo(solved.rowRange(y0, y0 + rows));
     if (scale_albedo) albedo_q.count(band.albedo, band.solved);
@@ -170,9 +174,14 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   // Pass 2: the quantiles gathered (none to gather: no second read).
   const bool gather =
       albedo_q.located() || residual_q.located() || depth_median.located() || error_q.located();
+  io::SolveFolderRows::Wanted gathered;
+  gathered.normals = sources.truth != nullptr;
+  gathered.albedo = albedo_q.located();
+  gathered.residual = residual_q.located();
+  gathered.colour = gathered.confidence = gathered.coefficients = false;
   if (gather)
     for_each_band([&](int y0, int rows) {
-      const io::SolveFolder band = read_maps(y0, rows);
+      const io::SolveFolder band = read_maps(y0, rows, &gathered);
       if (scale_albedo) albedo_q.gather(band.albedo, band.solved);
       if (!band.residual.empty()) residual_q.gather(band.residual, band.solved);
       if (sources.depth && sources.depth->focal_px > 0) {
@@ -217,8 +226,10 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
     albedo_pyramid =
         std::make_unique<DeepZoomWriter>(sources.pyramid_dir / "albedo.dzi", size, sources.pyramid);
   }
+  io::SolveFolderRows::Wanted drawn;
+  drawn.coefficients = false;
   for_each_band([&](int y0, int rows) {
-    const io::SolveFolder band = read_maps(y0, rows);
+    const io::SolveFolder band = read_maps(y0, rows, &drawn);
     const cv::Mat normal_picture = normal_colours(band.normals, band.solved);
     normals.add(normal_picture);
     const cv::Mat grey_albedo =

@@ -34,14 +34,29 @@ class SolveFolderRows {
   // Bytes a pixel of the maps read() returns.
   std::size_t bytes_per_pixel() const;
 
+  // The maps a read decodes (those the folder holds); the others stay empty.
+  struct Wanted {
+    bool normals = true;
+    bool albedo = true;
+    bool colour = true;  // the colour albedo's chroma; decodes the grey albedo too
+    bool residual = true;
+    bool confidence = true;
+    bool coefficients = true;
+  };
+
   // Rows [y0, y0 + rows): a SolveFolder of those rows with facts()'s facts.
   // Bands read top to bottom decode each file once. Throws InputError naming a
   // file that fails to decode at those rows.
-  SolveFolder read(int y0, int rows);
+  //
+  // `solved`, when not empty, is those rows' solved mask from an earlier read:
+  // normal.png is then decoded only when there is no normal.exr to take the
+  // normals from, or not at all when the normals are not wanted.
+  SolveFolder read(int y0, int rows, const Wanted& wanted, const cv::Mat& solved = cv::Mat());
+  SolveFolder read(int y0, int rows) { return read(y0, rows, Wanted{}); }
 
  private:
-  // Every map but the normals, rows [y0, y0 + rows), into `band`.
-  void read_maps(int y0, int rows, SolveFolder& band);
+  // The wanted maps but the normals, rows [y0, y0 + rows), into `band`.
+  void read_maps(int y0, int rows, const Wanted& wanted, SolveFolder& band);
 
   SolveFolder facts_;
   cv::Size size_;
