@@ -68,13 +68,17 @@ void expect_same_map(const cv::Mat& a, const cv::Mat& b, const std::string& what
   EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0) << what;
 }
 
-// Solves `stack` whole and in bands of 5 rows with `settings`, and compares what they wrote.
-// rpca's bands end where its runs of rows do: at most 5 rows, `bands` or more of them.
+// Solves `stack` whole and in bands of 5 rows with `settings`, each band in
+// parts of 2, 2 and 1 rows, and compares what they wrote. rpca's bands end
+// where its runs of rows do: at most 5 rows, `bands` or more of them, each whole.
 void expect_bands_equal_whole(const fs::path& stack, SolveSettings settings, const fs::path& out,
                               int bands = 8) {
   const std::string name = settings.method;
   const SolveReport whole = solve_folder(stack, settings, out / (name + "_whole"));
   settings.memory_limit = limit_for_rows(stack, 5, settings);
+  const io::StackOutline outline = io::read_stack_outline(stack);
+  settings.band_part_bytes =
+      2 * static_cast<std::size_t>(outline.size.width) * outline.images * sizeof(float);
   const SolveReport banded = solve_folder(stack, settings, out / (name + "_bands"));
   SCOPED_TRACE(name);
   EXPECT_FALSE(whole.summary.contains("bands"));

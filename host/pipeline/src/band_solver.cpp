@@ -34,6 +34,35 @@ const SolveFact* find_fact(const std::vector<SolveFact>& facts, const std::strin
   return it == facts.end() ? nullptr : &*it;
 }
 
+// The rows of a band's part (SolveSettings::band_part_bytes): its observations
+// made and visited together. Matrices within glibc's largest reused block
+// (32 MB) take the heap pages the part before freed; larger ones are fresh
+// pages the kernel zeroes first, a quarter of the observations' time at
+// 24 Mpx (docs/large-captures.md).
+int part_rows(const ImageStack& band, std::size_t part_bytes) {
+  const std::size_t row_bytes = static_cast<std::size_t>(std::max(band.width(), 1)) *
+                                std::max<std::size_t>(band.frames.size(), 1) * sizeof(float);
+  return static_cast<int>(std::clamp<std::size_t>(part_bytes / row_bytes, 1,
+                                                  static_cast<std::size_t>(std::max(band.height(), 1))));
+}
+
+// Rows [top, top + rows) of a band: views of its frames, dark frames, mask and ground truth.
+ImageStack rows_of(const ImageStack& band, int top, int rows) {
+  if (top == 0 && rows == band.height()) return band;
+  const cv::Range range(top, top + rows);
+  const auto cut = [&](const cv::Mat& map) { return map.empty() ? map : map.rowRange(range); };
+  ImageStack part;
+  part.frames = band.frames;
+  for (Frame& frame : part.frames) {
+    frame.image = cut(frame.image);
+    frame.dark = cut(frame.dark);
+  }
+  part.mask = cut(band.mask);
+  if (band.ground_truth)
+    part.ground_truth = GroundTruth{cut(band.ground_truth->normals), cut(band.ground_truth->depth)};
+  return part;
+}
+
 }  // namespace
 
 void BandResults::add(const SolveResult& band, int y0) {
@@ -182,12 +211,17 @@ void BandSolver::for_each_band(int begin, int end, const BandVisit& visit) {
       band.frames[i] = std::move(frame);
     }
     if (response_.response) apply_response(*response_.response, band, input_.string());
-    Observations observations = make_observations(band, settings_.radiometry);
-    observations.origin = {region_.x, region_.y + y0};
-    observations.whole_size = stack_.size();
-    observations.first_pixel = first_pixel;
-    first_pixel += observations.pixel_count();
-    visit(band, observations, y0);
+    // rpca's blocks need its band whole.
+    const int step = band_ends_.empty() ? part_rows(band, settings_.band_part_bytes) : rows;
+    for (int top = 0; top < rows; top += step) {
+      ImageStack part = rows_of(band, top, std::min(step, rows - top));
+      Observations observations = make_observations(part, settings_.radiometry);
+      observations.origin = {region_.x, region_.y + y0 + top};
+      observations.whole_size = stack_.size();
+      observations.first_pixel = first_pixel;
+      first_pixel += observations.pixel_count();
+      visit(part, observations, y0 + top);
+    }
     y0 += rows;
   }
 }
