@@ -11,8 +11,11 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <functional>
+#include <map>
 #include <system_error>
 #include <utility>
+#include <vector>
 
 namespace lightstage::io {
 namespace {
@@ -111,31 +114,34 @@ ImageStack StackBands::read_band(int y0, int rows) {
   if (!opened_) open_frames();
   ImageStack band;
   band.frames = index_.frames;
-  parallel_chunks(frames_.size(), options_.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      frames_[i]->read(y0, rows, band.frames[i].image);
-      check_finite_pixels(frames_[i]->path(), band.frames[i].image, y0);
-    }
-  });
-  std::map<std::string, cv::Mat> darks;
-  for (auto& [name, reader] : darks_) {
-    cv::Mat& dark = darks[name];
-    reader->read(y0, rows, dark);
-    check_finite_pixels(reader->path(), dark, y0);
-  }
-  for (Frame& frame : band.frames)
-    if (!frame.dark_file.empty()) frame.dark = darks.at(frame.dark_file);
-  if (!index_.mask.empty()) band.mask = index_.mask.rowRange(y0, y0 + rows).clone();
-  if (normals_ || depth_) {
-    GroundTruth truth;
-    if (normals_) {
+  // Every file's rows are a task of their own, handed to the next free thread:
+  // split in fixed halves, one thread sat idle while the other finished its
+  // last frames and the ground truth.
+  std::vector<std::function<void()>> files;
+  GroundTruth truth;
+  if (normals_)
+    files.emplace_back([&] {
       cv::Mat encoded;
       normals_->read(y0, rows, encoded);
       truth.normals = decode_normal_map(encoded, normals_->path().string()).normals;
-    }
-    if (depth_) depth_->read(y0, rows, truth.depth);
-    band.ground_truth = std::move(truth);
-  }
+    });
+  if (depth_) files.emplace_back([&] { depth_->read(y0, rows, truth.depth); });
+  std::map<std::string, cv::Mat> darks;
+  for (auto& [name, reader] : darks_)
+    files.emplace_back([&, &dark = darks[name], reader = reader.get()] {
+      reader->read(y0, rows, dark);
+      check_finite_pixels(reader->path(), dark, y0);
+    });
+  for (std::size_t i = 0; i < frames_.size(); ++i)
+    files.emplace_back([&, i] {
+      frames_[i]->read(y0, rows, band.frames[i].image);
+      check_finite_pixels(frames_[i]->path(), band.frames[i].image, y0);
+    });
+  parallel_invoke(files, options_.threads);
+  for (Frame& frame : band.frames)
+    if (!frame.dark_file.empty()) frame.dark = darks.at(frame.dark_file);
+  if (!index_.mask.empty()) band.mask = index_.mask.rowRange(y0, y0 + rows).clone();
+  if (normals_ || depth_) band.ground_truth = std::move(truth);
   rows_read_ += static_cast<std::size_t>(rows);
   return band;
 }
