@@ -86,9 +86,11 @@ void expect_bands_equal_whole(const fs::path& stack, SolveSettings settings, con
   if (settings.method == "rpca") {
     EXPECT_LE(banded.summary["bands"]["band_rows"], 5);
     EXPECT_GE(banded.summary["bands"]["bands"], bands);
+    EXPECT_EQ(banded.summary["bands"]["part_rows"], banded.summary["bands"]["band_rows"]);
   } else {
     EXPECT_EQ(banded.summary["bands"]["band_rows"], 5);
     EXPECT_EQ(banded.summary["bands"]["bands"], bands);
+    EXPECT_EQ(banded.summary["bands"]["part_rows"], 2);
   }
   for (const char* key : {"pixels_in_mask", "pixels_solved", "pixels_rejected_too_few_observations",
                           "pixels_rejected_degenerate", "lights", "radiometry"})
@@ -141,6 +143,26 @@ TEST(SolveBands, EveryMethodThatSolvesInBandsGivesTheWholeImageResult) {
 // shadows needs the threshold before its first band: two passes, and one
 // again with --shadow-threshold. On a sphere with background around it and
 // bands without a mask pixel, the threshold gathered equals the whole image's.
+// Dark frames (two exposures' darks, each shared by half the frames) cut
+// into parts as the frames are.
+TEST(SolveBands, DarkFramesInBandsAndPartsGiveTheWholeImageResult) {
+  const fs::path dir = lightstage::testing::scratch_dir();
+  ImageStack stack = io::load_stack(simulated(dir / "simulated", "bumps", "0.9,0.6,0.3"));
+  const cv::Mat& first = stack.frames.front().image;
+  cv::Mat dark_a(first.size(), first.type()), dark_b(first.size(), first.type());
+  cv::RNG rng(5);
+  rng.fill(dark_a, cv::RNG::UNIFORM, 0, 60);
+  rng.fill(dark_b, cv::RNG::UNIFORM, 0, 60);
+  for (std::size_t i = 0; i < stack.frames.size(); ++i) {
+    const bool a = i % 2 == 0;
+    stack.frames[i].dark = a ? dark_a : dark_b;
+    stack.frames[i].dark_file = a ? "dark_a.png" : "dark_b.png";
+  }
+  io::write_stack(dir / "stack", stack);
+  for (const char* method : {"l2", "robust"})
+    expect_bands_equal_whole(dir / "stack", settings_for(method, "auto"), dir / method);
+}
+
 TEST(SolveBands, L2ReadsTheStackOnceAndAMethodThatDropsShadowsTwice) {
   const fs::path dir = lightstage::testing::scratch_dir();
   const fs::path stack = simulated(dir / "stack", "sphere");
@@ -246,9 +268,13 @@ TEST(SolveBands, ACropIsTheWholeSolveCutToItsRegionInBandsOrWhole) {
     SCOPED_TRACE(bands ? "bands" : "whole");
     SolveSettings settings = settings_for("l2", bands ? limit_for_rows(stack, 4) : "auto");
     settings.crop = "5,7,21,17";
+    settings.band_part_bytes = 3 * 21 * 96 * sizeof(float);  // bands of 4 rows in parts of 3 and 1
     const fs::path out = dir / (bands ? "crop_bands" : "crop_whole");
     const SolveReport crop = solve_folder(stack, settings, out);
     EXPECT_EQ(crop.summary.contains("bands"), bands);
+    if (bands) {
+      EXPECT_EQ(crop.summary["bands"]["part_rows"], 3);
+    }
     EXPECT_EQ(crop.summary["crop"], nlohmann::json({5, 7, 21, 17}));
     EXPECT_EQ(crop.summary["lights"], whole.summary["lights"]);
     expect_same_map(io::read_exr(out / "normal.exr", {"R", "G", "B"}), expected, "normals");

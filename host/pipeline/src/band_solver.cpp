@@ -35,32 +35,16 @@ const SolveFact* find_fact(const std::vector<SolveFact>& facts, const std::strin
 }
 
 // The rows of a band's part (SolveSettings::band_part_bytes): its observations
-// made and visited together. Matrices within glibc's largest reused block
-// (32 MB) take the heap pages the part before freed; larger ones are fresh
-// pages the kernel zeroes first, a quarter of the observations' time at
-// 24 Mpx (docs/large-captures.md).
-int part_rows(const ImageStack& band, std::size_t part_bytes) {
-  const std::size_t row_bytes = static_cast<std::size_t>(std::max(band.width(), 1)) *
-                                std::max<std::size_t>(band.frames.size(), 1) * sizeof(float);
-  return static_cast<int>(std::clamp<std::size_t>(part_bytes / row_bytes, 1,
-                                                  static_cast<std::size_t>(std::max(band.height(), 1))));
-}
-
-// Rows [top, top + rows) of a band: views of its frames, dark frames, mask and ground truth.
-ImageStack rows_of(const ImageStack& band, int top, int rows) {
-  if (top == 0 && rows == band.height()) return band;
-  const cv::Range range(top, top + rows);
-  const auto cut = [&](const cv::Mat& map) { return map.empty() ? map : map.rowRange(range); };
-  ImageStack part;
-  part.frames = band.frames;
-  for (Frame& frame : part.frames) {
-    frame.image = cut(frame.image);
-    frame.dark = cut(frame.dark);
-  }
-  part.mask = cut(band.mask);
-  if (band.ground_truth)
-    part.ground_truth = GroundTruth{cut(band.ground_truth->normals), cut(band.ground_truth->depth)};
-  return part;
+// made and visited together. Freed blocks up to 32 MB raise glibc's threshold
+// for taking blocks from the heap rather than fresh pages, so after the first
+// part each part's matrices reuse the pages the part before freed; a band's
+// (hundreds of MB) were fresh pages the kernel zeroed first, a quarter of the
+// observations' time at 24 Mpx (docs/large-captures.md). One row at least.
+int part_rows(int width, std::size_t images, std::size_t part_bytes, int band_rows) {
+  const std::size_t row_bytes =
+      static_cast<std::size_t>(std::max(width, 1)) * std::max<std::size_t>(images, 1) * sizeof(float);
+  return static_cast<int>(
+      std::clamp<std::size_t>(part_bytes / row_bytes, 1, static_cast<std::size_t>(std::max(band_rows, 1))));
 }
 
 }  // namespace
@@ -212,9 +196,12 @@ void BandSolver::for_each_band(int begin, int end, const BandVisit& visit) {
     }
     if (response_.response) apply_response(*response_.response, band, input_.string());
     // rpca's blocks need its band whole.
-    const int step = band_ends_.empty() ? part_rows(band, settings_.band_part_bytes) : rows;
+    const int step = band_ends_.empty()
+                         ? part_rows(band.width(), band.frames.size(), settings_.band_part_bytes, rows)
+                         : rows;
     for (int top = 0; top < rows; top += step) {
-      ImageStack part = rows_of(band, top, std::min(step, rows - top));
+      ImageStack part =
+          step == rows ? band : stack_area(band, cv::Rect(0, top, band.width(), std::min(step, rows - top)));
       Observations observations = make_observations(part, settings_.radiometry);
       observations.origin = {region_.x, region_.y + y0 + top};
       observations.whole_size = stack_.size();
@@ -349,6 +336,10 @@ nlohmann::json BandSolver::describe() const {
        {{"clamp_to_one", settings_.radiometry.clamp_to_one}, {"response", response_.description}}},
       {"lights", light_model_},
       {"bands", plan_.to_json()}};
+  // rpca's bands are solved whole.
+  extra["bands"]["part_rows"] = band_ends_.empty() ? part_rows(size().width, meta_.frames.size(),
+                                                               settings_.band_part_bytes, plan_.band_rows)
+                                                   : plan_.band_rows;
   if (region_.size() != stack_.size()) extra["crop"] = {region_.x, region_.y, region_.width, region_.height};
   if (applied_) {
     extra["calibration"] = applied_->describe();

@@ -11,6 +11,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <exception>
 #include <functional>
 #include <map>
 #include <system_error>
@@ -114,30 +115,45 @@ ImageStack StackBands::read_band(int y0, int rows) {
   if (!opened_) open_frames();
   ImageStack band;
   band.frames = index_.frames;
-  // Every file's rows are a task of their own, handed to the next free thread:
-  // split in fixed halves, one thread sat idle while the other finished its
-  // last frames and the ground truth.
+  // Every file's rows are a task of their own, handed to the next free thread,
+  // the ground truth (the largest file after the frames) first so that no
+  // thread waits on it at the end. Errors are raised afterwards in the order
+  // load_stack checks the files: the frames', the ground truth's, the darks'.
+  const std::size_t count = frames_.size();
+  std::vector<std::exception_ptr> errors(count + 2 + darks_.size());
   std::vector<std::function<void()>> files;
+  const auto add = [&](std::size_t slot, std::function<void()> read) {
+    files.emplace_back([&errors, slot, read = std::move(read)] {
+      try {
+        read();
+      } catch (...) {
+        errors[slot] = std::current_exception();
+      }
+    });
+  };
   GroundTruth truth;
   if (normals_)
-    files.emplace_back([&] {
+    add(count, [&] {
       cv::Mat encoded;
       normals_->read(y0, rows, encoded);
       truth.normals = decode_normal_map(encoded, normals_->path().string()).normals;
     });
-  if (depth_) files.emplace_back([&] { depth_->read(y0, rows, truth.depth); });
+  if (depth_) add(count + 1, [&] { depth_->read(y0, rows, truth.depth); });
   std::map<std::string, cv::Mat> darks;
+  std::size_t dark_slot = count + 2;
   for (auto& [name, reader] : darks_)
-    files.emplace_back([&, &dark = darks[name], reader = reader.get()] {
+    add(dark_slot++, [&, &dark = darks[name], reader = reader.get()] {
       reader->read(y0, rows, dark);
       check_finite_pixels(reader->path(), dark, y0);
     });
-  for (std::size_t i = 0; i < frames_.size(); ++i)
-    files.emplace_back([&, i] {
+  for (std::size_t i = 0; i < count; ++i)
+    add(i, [&, i] {
       frames_[i]->read(y0, rows, band.frames[i].image);
       check_finite_pixels(frames_[i]->path(), band.frames[i].image, y0);
     });
   parallel_invoke(files, options_.threads);
+  for (const std::exception_ptr& error : errors)
+    if (error) std::rethrow_exception(error);
   for (Frame& frame : band.frames)
     if (!frame.dark_file.empty()) frame.dark = darks.at(frame.dark_file);
   if (!index_.mask.empty()) band.mask = index_.mask.rowRange(y0, y0 + rows).clone();

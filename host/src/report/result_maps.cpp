@@ -171,24 +171,23 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   out.viewer = viewer.finish();
   for (MapQuantile* q : {&albedo_q, &residual_q, &depth_median, &error_q}) q->locate();
 
-  // Pass 2: the quantiles gathered (none to gather: no second read).
-  const bool gather =
-      albedo_q.located() || residual_q.located() || depth_median.located() || error_q.located();
+  // Pass 2: the quantiles gathered, from only the maps they need (none to gather: no second read).
   io::SolveFolderRows::Wanted gathered;
-  gathered.normals = sources.truth != nullptr;
   gathered.albedo = albedo_q.located();
   gathered.residual = residual_q.located();
+  gathered.normals = error_q.located();  // the error map's
   gathered.colour = gathered.confidence = gathered.coefficients = false;
-  if (gather)
+  const bool gather_depth = depth_median.located();
+  if (gathered.albedo || gathered.residual || gathered.normals || gather_depth)
     for_each_band([&](int y0, int rows) {
       const io::SolveFolder band = read_maps(y0, rows, &gathered);
-      if (scale_albedo) albedo_q.gather(band.albedo, band.solved);
-      if (!band.residual.empty()) residual_q.gather(band.residual, band.solved);
-      if (sources.depth && sources.depth->focal_px > 0) {
+      if (gathered.albedo) albedo_q.gather(band.albedo, band.solved);
+      if (gathered.residual) residual_q.gather(band.residual, band.solved);
+      if (gather_depth) {
         const cv::Mat depth = read_depth(y0, rows);
         depth_median.gather(depth, usable_depth(depth, band.solved));
       }
-      if (sources.truth) {
+      if (gathered.normals) {
         AngularErrorAccumulator again;
         const AngularErrorMap map = error_rows(band, y0, rows, again);
         error_q.gather(map.degrees, map.valid);

@@ -45,12 +45,13 @@ class SolveFolderRows {
   };
 
   // Rows [y0, y0 + rows): a SolveFolder of those rows with facts()'s facts.
-  // Bands read top to bottom decode each file once. Throws InputError naming a
-  // file that fails to decode at those rows.
+  // Bands read top to bottom decode each file they read once. Throws
+  // InputError naming a file that fails to decode at those rows.
   //
   // `solved`, when not empty, is those rows' solved mask from an earlier read:
   // normal.png is then decoded only when there is no normal.exr to take the
-  // normals from, or not at all when the normals are not wanted.
+  // normals from (its own mask is then returned), or not at all when the
+  // normals are not wanted. The band's `solved` shares the caller's pixels.
   SolveFolder read(int y0, int rows, const Wanted& wanted, const cv::Mat& solved = cv::Mat());
   SolveFolder read(int y0, int rows) { return read(y0, rows, Wanted{}); }
 

@@ -6,8 +6,8 @@
 // reading by rows (io/row_reader.hpp); it is cheap enough to size a solve
 // before deciding how to read the stack. The first read_band() opens the
 // other frames (refusing one of another size or type); each call decodes the
-// same rows of every image (frames in parallel, each file's decoding carried
-// on from the band before) into an ImageStack that is exactly those rows of
+// same rows of every image (each file beside the others, its decoding carried
+// on from the band before; with several bad files the error is load_stack's) into an ImageStack that is exactly those rows of
 // what load_stack gives: the same frames, fields and values, dark frames,
 // mask and ground truth. Float pixels are checked finite band by band.
 // Camera RAW files and interlaced PNGs decode only whole: each such frame is

@@ -56,9 +56,9 @@ struct SolveSettings {
   RadiometryOptions radiometry;
   // --memory-limit (memory_budget.hpp): a stack whose solve would need more is solved in bands.
   std::string memory_limit = "auto";
-  // A band's observations are made and solved in parts of its rows of at most
-  // this many bytes of observations (band_solver.cpp says why); tests make it
-  // small to split their small bands.
+  // A band's observations are made and solved in parts of its rows holding
+  // about this many bytes of observations, one row at least (band_solver.cpp
+  // says why); tests make it small to split their small bands.
   std::size_t band_part_bytes = std::size_t{24} << 20;
   // --crop X,Y,W,H: only that region of the images (from the top left) is read
   // and solved; its maps are W x H, near lights and calibration still placed
