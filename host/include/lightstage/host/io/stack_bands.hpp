@@ -7,12 +7,12 @@
 // before deciding how to read the stack. The first read_band() opens the
 // other frames (refusing one of another size or type); each call decodes the
 // same rows of every image (each file beside the others, its decoding carried
-// on from the band before; with several bad files the error is load_stack's) into an ImageStack that is exactly those rows of
-// what load_stack gives: the same frames, fields and values, dark frames,
-// mask and ground truth. Float pixels are checked finite band by band.
-// Camera RAW files and interlaced PNGs decode only whole: each such frame is
-// decoded at the first band and its rows kept in a temporary file
-// (row_reader.hpp).
+// on from the band before; with several bad files the error is load_stack's)
+// into an ImageStack that is exactly those rows of what load_stack gives: the
+// same frames, fields and values, dark frames, mask and ground truth. Float
+// pixels are checked finite band by band. Camera RAW files and interlaced
+// PNGs decode only whole: each such frame is decoded at the first band and
+// its rows kept in a temporary file (row_reader.hpp).
 
 #include "lightstage/common/image_stack.hpp"
 #include "lightstage/host/io/stack_io.hpp"
