@@ -200,8 +200,7 @@ void BandSolver::for_each_band(int begin, int end, const BandVisit& visit) {
                          ? part_rows(band.width(), band.frames.size(), settings_.band_part_bytes, rows)
                          : rows;
     for (int top = 0; top < rows; top += step) {
-      ImageStack part =
-          step == rows ? band : stack_area(band, cv::Rect(0, top, band.width(), std::min(step, rows - top)));
+      ImageStack part = stack_area(band, cv::Rect(0, top, band.width(), std::min(step, rows - top)));
       Observations observations = make_observations(part, settings_.radiometry);
       observations.origin = {region_.x, region_.y + y0 + top};
       observations.whole_size = stack_.size();
