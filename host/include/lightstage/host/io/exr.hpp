@@ -83,7 +83,7 @@ class RowReader;
 std::unique_ptr<RowReader> open_exr_rows(const std::filesystem::path& path,
                                          const std::vector<std::string>& channels);
 
-// Writes CV_32FC1 or CV_32FC3 as 32-bit FLOAT channels with ZIP compression,
+// Writes CV_32FC1 or CV_32FC3 as 32-bit FLOAT channels, uncompressed,
 // atomically (a temporary file beside it, then a rename); channel i of the
 // image is named channels[i]. Throws InputError naming the file for another
 // type, names that do not match the channels (wrong count, empty, repeated),

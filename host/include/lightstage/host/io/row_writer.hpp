@@ -50,7 +50,7 @@ class RowWriter {
 std::unique_ptr<RowWriter> open_png_writer(const std::filesystem::path& path, cv::Size size, int type);
 // CV_32FC1 or CV_32FC3 (BGR in memory, as write_pfm).
 std::unique_ptr<RowWriter> open_pfm_writer(const std::filesystem::path& path, cv::Size size, int type);
-// CV_32FC1 or CV_32FC3 with one name per channel in memory order (as write_exr: float, ZIP).
+// CV_32FC1 or CV_32FC3 with one name per channel in memory order (as write_exr: float, uncompressed).
 std::unique_ptr<RowWriter> open_exr_writer(const std::filesystem::path& path, cv::Size size, int type,
                                            const std::vector<std::string>& channels);
 

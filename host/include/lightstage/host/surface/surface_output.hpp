@@ -1,7 +1,7 @@
 #pragma once
 // A surface on disk, in one output folder:
 //   depth.pfm     float depth (camera.hpp depth values; 0 outside the surface)
-//   depth.exr     the same float depth as an EXR (one FLOAT channel named Z, ZIP-compressed)
+//   depth.exr     the same float depth as an EXR (one FLOAT channel named Z, uncompressed)
 //   depth.png     16-bit picture of it: DN = 1 + round((d − min)/(max − min) · 65534), 0 outside
 //                 (min and max recorded in surface.json)
 //   mesh.ply      binary PLY with vertex normals and albedo colours (optional)
