@@ -4,24 +4,45 @@
 
 namespace lightstage {
 
-void near_light_directions(const NearLights& near, std::size_t pixel, Eigen::MatrixX3d& directions,
-                           Eigen::VectorXd& gains) {
+namespace {
+
+// The unit directions, and in `squared` each LED's squared distance from the pixel's point.
+void directions_and_distances(const NearLights& near, std::size_t pixel, Eigen::MatrixX3d& directions,
+                              Eigen::VectorXd& squared) {
   const Eigen::Index n = near.led_positions_mm.rows();
   directions.resize(n, 3);
-  gains.resize(n);
+  squared.resize(n);
   const Eigen::MatrixX3d& leds = near.led_positions_mm;
   const Eigen::Index row = static_cast<Eigen::Index>(pixel);
-  const Eigen::Vector3d& c = near.object_centre_mm;
   // Whole columns at a time (SIMD lanes of lights), squared distances throughout: one square root a light
   // (this runs for every pixel and light).
   const auto dx = leds.col(0).array() - near.points_mm(row, 0);
   const auto dy = leds.col(1).array() - near.points_mm(row, 1);
   const auto dz = leds.col(2).array() - near.points_mm(row, 2);
-  gains = dx * dx + dy * dy + dz * dz;                 // d², until the last line
-  directions.col(2) = gains.array().sqrt().inverse();  // 1 / d, until the line below
+  squared = dx * dx + dy * dy + dz * dz;
+  directions.col(2) = squared.array().sqrt().inverse();  // 1 / d, until the line below
   directions.col(0) = dx * directions.col(2).array();
   directions.col(1) = dy * directions.col(2).array();
   directions.col(2).array() *= dz;
+}
+
+}  // namespace
+
+Eigen::VectorXd near_light_reference(const NearLights& near) {
+  return (near.led_positions_mm.rowwise() - near.object_centre_mm.transpose()).rowwise().squaredNorm();
+}
+
+void near_light_directions(const NearLights& near, const Eigen::VectorXd& reference, std::size_t pixel,
+                           Eigen::MatrixX3d& directions, Eigen::VectorXd& gains) {
+  directions_and_distances(near, pixel, directions, gains);
+  gains = reference.array() / gains.array();
+}
+
+void near_light_directions(const NearLights& near, std::size_t pixel, Eigen::MatrixX3d& directions,
+                           Eigen::VectorXd& gains) {
+  directions_and_distances(near, pixel, directions, gains);
+  const Eigen::MatrixX3d& leds = near.led_positions_mm;
+  const Eigen::Vector3d& c = near.object_centre_mm;
   const auto cx = leds.col(0).array() - c.x(), cy = leds.col(1).array() - c.y(),
              cz = leds.col(2).array() - c.z();
   gains = (cx * cx + cy * cy + cz * cz) / gains.array();

@@ -129,6 +129,7 @@ float predicted_error(const Observations& obs, std::size_t p, const Maps& maps, 
 Counters solve_selected(const Observations& obs, const L2Options& options, Maps& maps) {
   const Eigen::Index images = static_cast<Eigen::Index>(obs.image_count());
   const std::size_t pixels = obs.pixel_count();
+  const Eigen::VectorXd centre_squared = obs.near ? near_light_reference(*obs.near) : Eigen::VectorXd();
   // Resolved once: the chunks must be no more than the counters made for them.
   const int threads = resolve_threads(options.threads);
   std::vector<Counters> per_chunk(static_cast<std::size_t>(threads));
@@ -141,51 +142,64 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
     std::optional<PixelErrorPredictor> predictor;
     if (options.confidence) predictor.emplace(*options.confidence);
     Eigen::VectorXf corrected(images);
-    Eigen::VectorXd every_value(images), fitted(images);
+    std::vector<double> weight(static_cast<std::size_t>(images));  // 1 for a kept light, else 0
     detail::ProgressBatch batch(options.progress);
     for (std::size_t p = begin; p < end; ++p) {
       batch.tick();
       const auto observed = obs.intensities.row(static_cast<Eigen::Index>(p));
       corrected = observed.transpose();
       if (obs.near) {
-        near_light_directions(*obs.near, p, data.lights, data.near_gains);
+        near_light_directions(*obs.near, centre_squared, p, data.lights, data.near_gains);
         corrected.array() /= data.near_gains.cast<float>().array();
       }
-      const Eigen::MatrixX3d& lights = data.lights;
       const auto& row = corrected;
-      kept.clear();
+      std::size_t count = 0;
       for (Eigen::Index j = 0; j < images; ++j) {
         const float value = observed(j);
-        if (!std::isfinite(value)) continue;
-        if (options.shadow_threshold >= 0 && static_cast<double>(value) <= options.shadow_threshold) continue;
-        kept.push_back(j);
+        const bool keep = std::isfinite(value) && !(options.shadow_threshold >= 0 &&
+                                                    static_cast<double>(value) <= options.shadow_threshold);
+        weight[static_cast<std::size_t>(j)] = keep ? 1.0 : 0.0;
+        count += keep ? 1 : 0;
       }
       if (options.t_low < 1.0) {
+        kept.clear();
+        for (Eigen::Index j = 0; j < images; ++j)
+          if (weight[static_cast<std::size_t>(j)] != 0) kept.push_back(j);
         const auto keep =
             static_cast<std::size_t>(std::ceil(options.t_low * static_cast<double>(kept.size()) - 1e-9));
         std::stable_sort(kept.begin(), kept.end(),
                          [&](Eigen::Index a, Eigen::Index b) { return row(a) < row(b); });
-        kept.resize(std::min(keep, kept.size()));
+        for (std::size_t k = std::min(keep, kept.size()); k < kept.size(); ++k)
+          weight[static_cast<std::size_t>(kept[k])] = 0.0;
+        count = std::min(keep, kept.size());
       }
-      if (static_cast<int>(kept.size()) < options.min_observations) {
+      if (static_cast<int>(count) < options.min_observations) {
         ++counters.too_few;
         continue;
       }
-      // Every light kept (l2's default): the sums as matrix products, not a light at a time.
-      const bool every = kept.size() == static_cast<std::size_t>(images);
-      Eigen::Matrix3d gram = Eigen::Matrix3d::Zero();
-      Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-      if (every) {
-        every_value = row.cast<double>();
-        gram.noalias() = lights.transpose().lazyProduct(lights);
-        rhs.noalias() = lights.transpose() * every_value;
-      } else {
-        for (const Eigen::Index j : kept) {
-          const Eigen::Vector3d l = lights.row(j).transpose();
-          gram += l * l.transpose();
-          rhs += static_cast<double>(row(j)) * l;
-        }
+      // The normal equations, a light at a time over the lights' columns; a
+      // light left out adds exact zeros (its value, maybe not finite, is not read).
+      const double* lx = data.lights.col(0).data();
+      const double* ly = data.lights.col(1).data();
+      const double* lz = data.lights.col(2).data();
+      double gxx = 0, gxy = 0, gxz = 0, gyy = 0, gyz = 0, gzz = 0, bx = 0, by = 0, bz = 0;
+      for (Eigen::Index j = 0; j < images; ++j) {
+        const double w = weight[static_cast<std::size_t>(j)];
+        const double v = w != 0 ? static_cast<double>(row(j)) : 0.0;
+        const double x = w * lx[j], y = w * ly[j], z = w * lz[j];
+        gxx += x * lx[j];
+        gxy += x * ly[j];
+        gxz += x * lz[j];
+        gyy += y * ly[j];
+        gyz += y * lz[j];
+        gzz += z * lz[j];
+        bx += x * v;
+        by += y * v;
+        bz += z * v;
       }
+      Eigen::Matrix3d gram;
+      gram << gxx, gxy, gxz, gxy, gyy, gyz, gxz, gyz, gzz;
+      const Eigen::Vector3d rhs(bx, by, bz);
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
       eigen.computeDirect(gram);
       const Eigen::Vector3d lambda = eigen.eigenvalues();
@@ -196,16 +210,13 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
       const Eigen::Matrix3d& v = eigen.eigenvectors();
       const Eigen::Vector3d s = v * (v.transpose() * rhs).cwiseQuotient(lambda);
       double squared = 0;
-      if (every) {
-        fitted.noalias() = lights * s;
-        squared = (fitted - every_value).squaredNorm();
-      } else {
-        for (const Eigen::Index j : kept) {
-          const double r = lights.row(j).dot(s) - static_cast<double>(row(j));
-          squared += r * r;
-        }
+      for (Eigen::Index j = 0; j < images; ++j) {
+        const double w = weight[static_cast<std::size_t>(j)];
+        const double r =
+            w != 0 ? lx[j] * s.x() + ly[j] * s.y() + lz[j] * s.z() - static_cast<double>(row(j)) : 0.0;
+        squared += r * r;
       }
-      if (store(s, std::sqrt(squared / static_cast<double>(kept.size())), obs.pixels[p], maps)) {
+      if (store(s, std::sqrt(squared / static_cast<double>(count)), obs.pixels[p], maps)) {
         ++counters.solved;
         if (predictor)
           maps.predicted_error.at<float>(obs.pixels[p]) = predicted_error(obs, p, maps, data, *predictor);

@@ -29,26 +29,28 @@ double PixelErrorPredictor::predict(const PixelObservations& data, const Eigen::
   const double infinite = std::numeric_limits<double>::infinity();
   if (!(albedo > 0 && std::isfinite(albedo))) return infinite;
   const Eigen::Index images = data.count();
-  shading_.noalias() = data.lights * n;
-  misfit_ = (data.values - albedo * shading_).cwiseAbs();
-  if (inlier_lights_.rows() < images) {
-    lit_.resize(static_cast<std::size_t>(images));
-    magnitude_.resize(static_cast<std::size_t>(images));
-    inlier_lights_.resize(images, 3);
-    weighted_lights_.resize(images, 3);
-    inlier_values_.resize(images);
-    inlier_weights_.resize(images);
+  const auto count = static_cast<std::size_t>(images);
+  if (misfit_.size() < count) {
+    misfit_.resize(count);
+    magnitude_.resize(count);
+    lit_.resize(count);
   }
+  const double* lx = data.lights.col(0).data();
+  const double* ly = data.lights.col(1).data();
+  const double* lz = data.lights.col(2).data();
+  const double* values = data.values.data();
   // Written whatever the test says, kept by advancing: no branch to mispredict.
   std::size_t lit = 0;
   double lit_sum = 0;
-  for (Eigen::Index j = 0; j < images; ++j) {
-    const double value = data.values(j);
+  for (std::size_t j = 0; j < count; ++j) {
+    const double value = values[j];
+    const double shading = lx[j] * n.x() + ly[j] * n.y() + lz[j] * n.z();
+    const double misfit = std::abs(value - albedo * shading);
     // Lit, and not from behind the answer (the model has no slope there).
-    const bool counted =
-        data.usable[static_cast<std::size_t>(j)] && value > options.shadow_threshold && shading_(j) > 0;
-    lit_[static_cast<std::size_t>(j)] = counted;
-    magnitude_[lit] = misfit_(j);
+    const bool counted = data.usable[j] && value > options.shadow_threshold && shading > 0;
+    lit_[j] = counted;
+    misfit_[j] = misfit;
+    magnitude_[lit] = misfit;
     lit += counted ? 1 : 0;
     lit_sum += counted ? value : 0.0;
   }
@@ -61,22 +63,35 @@ double PixelErrorPredictor::predict(const PixelObservations& data, const Eigen::
                          ? infinite
                          : std::max(floor, options.trim * select_kth(magnitude_.data(),
                                                                      static_cast<std::ptrdiff_t>(lit), half));
-  // The inliers' lights, their values and their residuals' magnitudes (floored), packed.
-  Eigen::Index inliers = 0;
-  for (Eigen::Index j = 0; j < images; ++j) {
-    const double magnitude = misfit_(j);
-    inlier_lights_.row(inliers) = data.lights.row(j);
-    inlier_values_(inliers) = data.values(j);
-    inlier_weights_(inliers) = std::max(magnitude, floor);
-    inliers += lit_[static_cast<std::size_t>(j)] && magnitude <= cut ? 1 : 0;
+  // The inliers' sums, a light at a time (an outlier adds exact zeros):
+  // M = Σ l lᵀ, S = Σ r² l lᵀ with r the residual's floored magnitude, and Σ v l.
+  double m[6] = {}, sandwich[6] = {}, moment[3] = {};
+  std::size_t inliers = 0;
+  for (std::size_t j = 0; j < count; ++j) {
+    const bool inlier = lit_[j] && misfit_[j] <= cut;
+    const double w = inlier ? 1.0 : 0.0;
+    // An outlier's value and residual may not be finite: neither is read.
+    const double r = inlier ? std::max(misfit_[j], floor) : 0.0;
+    const double v = inlier ? values[j] : 0.0;
+    const double x = w * lx[j], y = w * ly[j], z = w * lz[j];
+    const double outer[6] = {x * lx[j], x * ly[j], x * lz[j], y * ly[j], y * lz[j], z * lz[j]};
+    for (int k = 0; k < 6; ++k) {
+      m[k] += outer[k];
+      sandwich[k] += r * r * outer[k];
+    }
+    moment[0] += x * v;
+    moment[1] += y * v;
+    moment[2] += z * v;
+    inliers += inlier ? 1 : 0;
   }
   if (inliers < 3) return infinite;
-  const auto lights = inlier_lights_.topRows(inliers);
-  weighted_lights_.topRows(inliers) = inlier_weights_.head(inliers).asDiagonal() * lights;
-  const auto weighted = weighted_lights_.topRows(inliers);
-  const Eigen::Matrix3d gram = lights.transpose().lazyProduct(lights);               // Σ l lᵀ
-  const Eigen::Matrix3d meat = weighted.transpose().lazyProduct(weighted);           // Σ r² l lᵀ
-  const Eigen::Vector3d moment = lights.transpose() * inlier_values_.head(inliers);  // Σ v l
+  const auto symmetric = [](const double* e) {
+    Eigen::Matrix3d out;
+    out << e[0], e[1], e[2], e[1], e[3], e[4], e[2], e[4], e[5];
+    return out;
+  };
+  const Eigen::Matrix3d gram = symmetric(m);
+  const Eigen::Matrix3d meat = symmetric(sandwich);
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
   eigen.computeDirect(gram);
   const Eigen::Vector3d lambda = eigen.eigenvalues();
@@ -87,7 +102,7 @@ double PixelErrorPredictor::predict(const PixelObservations& data, const Eigen::
   const Eigen::Matrix3d bread = tangent * inverse;
   const double spread =
       deg_from_rad(std::sqrt(std::max(0.0, (bread * meat * bread.transpose()).trace())) / albedo);
-  const Eigen::Vector3d fitted = inverse * moment;
+  const Eigen::Vector3d fitted = inverse * Eigen::Vector3d(moment[0], moment[1], moment[2]);
   const double disagreement = fitted.squaredNorm() > 0 ? angle_between_deg(fitted, n) : 180.0;
   return std::hypot(spread, disagreement);
 }

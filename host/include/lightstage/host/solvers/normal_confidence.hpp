@@ -45,11 +45,8 @@ class PixelErrorPredictor {
 
  private:
   ConfidenceOptions options_;
-  Eigen::VectorXd shading_;        // images: lᵀn
-  Eigen::VectorXd misfit_;         // images: |v − ρ lᵀn|, the Lambertian residual's size
+  std::vector<double> misfit_;     // images: |v − ρ lᵀn|, the Lambertian residual's size
   std::vector<std::uint8_t> lit_;  // images: lit and facing the answer
-  Eigen::MatrixX3d inlier_lights_, weighted_lights_;  // the inliers' l and |r| l, in their first rows
-  Eigen::VectorXd inlier_values_, inlier_weights_;    // the inliers' v and |r|
   std::vector<double> magnitude_;  // the lit lights' |residual| first, reordered to find the median
 };
 
