@@ -34,6 +34,9 @@
 #include <functional>
 #include <map>
 #include <numbers>
+#include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 namespace lightstage::report {
@@ -94,20 +97,33 @@ struct Inputs {
   std::vector<std::string> notes;
 };
 
+// The page's sections, kept as they come and joined once at the end: the
+// viewer's data (tens of MB for a large result) is then copied once, not at
+// every section appended after it.
 class Page {
  public:
-  void section(const std::string& id, const std::string& title, const std::string& body) {
+  void section(const std::string& id, const std::string& title, std::string body) {
     sections_.push_back(id);
     nav_ += fmt::format("<a href=\"#{}\">{}</a>", id, escape_html(title));
-    body_ += fmt::format("<section id=\"{}\">\n<h2>{}</h2>\n{}</section>\n", id, escape_html(title), body);
+    pieces_.push_back(fmt::format("<section id=\"{}\">\n<h2>{}</h2>\n", id, escape_html(title)));
+    pieces_.push_back(std::move(body));
+    pieces_.push_back("</section>\n");
   }
   const std::vector<std::string>& sections() const { return sections_; }
   const std::string& nav() const { return nav_; }
-  const std::string& body() const { return body_; }
+  std::size_t body_size() const {
+    std::size_t size = 0;
+    for (const auto& piece : pieces_) size += piece.size();
+    return size;
+  }
+  void append_body(std::string& out) const {
+    for (const auto& piece : pieces_) out += piece;
+  }
 
  private:
   std::vector<std::string> sections_;
-  std::string nav_, body_;
+  std::string nav_;
+  std::vector<std::string> pieces_;
 };
 
 // A result of `solve --crop` covers summary.json's "crop" [x, y, w, h] of the
@@ -262,8 +278,10 @@ std::string viewer_section(const SurfaceModel& model, const Inputs& in) {
       grey_box);
   html += "<script type=\"application/json\" id=\"lightstage-viewer-meta\">" + payload.meta.dump() +
           "</script>\n";
-  html += "<script type=\"application/octet-stream\" id=\"lightstage-viewer-data\">" + payload.data_base64 +
-          "</script>\n";
+  html.reserve(html.size() + payload.data_base64.size() + 128);
+  html += "<script type=\"application/octet-stream\" id=\"lightstage-viewer-data\">";
+  html += payload.data_base64;
+  html += "</script>\n";
   return html;
 }
 
@@ -829,7 +847,7 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
 
   Page page;
   // The viewer first: it is what people come for.
-  page.section("viewer", "Relighting viewer", viewer_html);
+  page.section("viewer", "Relighting viewer", std::move(viewer_html));
   page.section("surface", "Normals and albedo", surface_html);
   if (pictures.depth) page.section("depth", "Depth", depth_html);
 
@@ -871,8 +889,13 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
   html += "<title>Lightstage report: " +
           escape_html(fs::absolute(result_dir).lexically_normal().filename().string()) +
           "</title>\n<style>\n" + web::kReportCss + "</style>\n</head>\n<body>\n<header>\n" +
-          header_html(in) + "<nav>" + page.nav() + "</nav>\n</header>\n<main>\n" + page.body() + "</main>\n";
-  html += "<script type=\"module\">\n" + std::string(web::kViewerScript) + "</script>\n</body>\n</html>\n";
+          header_html(in) + "<nav>" + page.nav() + "</nav>\n</header>\n<main>\n";
+  const std::string_view script = web::kViewerScript;
+  html.reserve(html.size() + page.body_size() + script.size() + 256);
+  page.append_body(html);
+  html += "</main>\n<script type=\"module\">\n";
+  html += script;
+  html += "</script>\n</body>\n</html>\n";
   if (summary) {
     summary->sections = page.sections();
     summary->notes = in.notes;
