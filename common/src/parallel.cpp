@@ -15,6 +15,9 @@ namespace {
 std::atomic<int> thread_limit{0};  // 0: the hardware's
 std::atomic<int> helper_threads{0};
 std::atomic<int> peak_helper_threads{0};
+// Threads running parallel work now: each outermost caller and every helper.
+std::atomic<int> busy_threads{0};
+thread_local bool inside_parallel_work = false;
 
 void count_helper(int change) {
   const int now = helper_threads.fetch_add(change) + change;
@@ -23,29 +26,61 @@ void count_helper(int change) {
   }
 }
 
-// Runs worker(0) on the caller's thread and worker(1..count-1) on their own,
-// then joins them all. `worker` must not throw.
+int limit_or_hardware() {
+  if (const int limit = thread_limit.load(); limit > 0) return limit;
+  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+}
+
+// Helpers a call wanting `wanted` may start. The outermost call starts them
+// all; a call made from parallel work takes only the threads of the limit
+// that no work is running on, so nesting never runs more threads at once
+// than the limit (or the outermost call's own count, if larger).
+int reserve_helpers(int wanted) {
+  if (!inside_parallel_work) {
+    busy_threads += 1 + wanted;
+    return wanted;
+  }
+  const int limit = limit_or_hardware();
+  int busy = busy_threads.load();
+  int granted = 0;
+  do {
+    granted = std::clamp(limit - busy, 0, wanted);
+  } while (granted > 0 && !busy_threads.compare_exchange_weak(busy, busy + granted));
+  return granted;
+}
+
+// Runs worker(0 .. count-1), worker(0) on the caller's thread, the others on
+// helpers (reserve_helpers): with fewer helpers than workers, a thread runs
+// several workers one after the other. Joins them all. `worker` must not throw.
 void run_workers(std::size_t count, const std::function<void(std::size_t)>& worker) {
+  const bool outermost = !inside_parallel_work;
+  const auto helpers = static_cast<std::size_t>(reserve_helpers(static_cast<int>(count) - 1));
+  const std::size_t stride = helpers + 1;
+  const auto run_share = [&worker, count, stride](std::size_t first) {
+    inside_parallel_work = true;
+    for (std::size_t w = first; w < count; w += stride) worker(w);
+  };
   std::vector<std::thread> threads;
-  threads.reserve(count - 1);
-  for (std::size_t w = 1; w < count; ++w) {
+  threads.reserve(helpers);
+  for (std::size_t h = 1; h <= helpers; ++h) {
     count_helper(+1);
-    threads.emplace_back([&worker, w] {
-      worker(w);
+    threads.emplace_back([&run_share, h] {
+      run_share(h);
       count_helper(-1);
+      --busy_threads;
     });
   }
-  worker(0);
+  run_share(0);
   for (auto& thread : threads) thread.join();
+  if (outermost) {
+    inside_parallel_work = false;
+    --busy_threads;
+  }
 }
 
 }  // namespace
 
-int resolve_threads(int requested) {
-  if (requested > 0) return requested;
-  if (const int limit = thread_limit.load(); limit > 0) return limit;
-  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-}
+int resolve_threads(int requested) { return requested > 0 ? requested : limit_or_hardware(); }
 
 ThreadLimit::ThreadLimit(int threads) {
   if (threads <= 0) return;

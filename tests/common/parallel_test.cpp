@@ -64,11 +64,51 @@ TEST(ParallelPeakThreads, CountsTheThreadsThatRanAtOnceWithTheCallerOnce) {
   EXPECT_EQ(peak_of(3, 0), 3);
   reset_parallel_peak_threads();
   EXPECT_EQ(parallel_peak_threads(), 1) << "a reset forgets the threads that have ended";
-  // Three workers that each start two: up to six threads, however the inner
-  // calls interleave at least four (the first inner call starts while all three run).
-  const int nested = peak_of(3, 2);
-  EXPECT_GE(nested, 4);
-  EXPECT_LE(nested, 6);
+}
+
+// Waits until `n` threads have arrived, or two seconds: a rule that ran
+// fewer threads side by side than expected shows as a smaller peak, not a hang.
+void meet(std::atomic<int>& arrived, int n) {
+  ++arrived;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+  while (arrived.load() < n && std::chrono::steady_clock::now() < deadline) std::this_thread::yield();
+}
+
+TEST(ParallelPeakThreads, NestedWorkTakesOnlyTheFreeThreadsOfTheLimit) {
+  {
+    // Three workers that each want two: the limit of three is already running, so each inner call runs on
+    // its worker's thread alone (without the rule, up to six threads).
+    const ThreadLimit limit(3);
+    EXPECT_EQ(peak_of(3, 2), 3);
+  }
+  {
+    // Two workers under a limit of four: two threads are free, one for each inner call.
+    const ThreadLimit limit(4);
+    reset_parallel_peak_threads();
+    std::atomic<int> outer{0}, inner{0};
+    parallel_for(2, 2, [&](int) {
+      meet(outer, 2);
+      parallel_for(2, 2, [&](int) { meet(inner, 4); });
+    });
+    EXPECT_EQ(parallel_peak_threads(), 4);
+  }
+  {
+    // A call nested in a call on one thread takes the threads free under the limit.
+    const ThreadLimit limit(3);
+    reset_parallel_peak_threads();
+    std::atomic<int> inner{0};
+    parallel_for(1, 1, [&](int) { parallel_for(3, 3, [&](int) { meet(inner, 3); }); });
+    EXPECT_EQ(parallel_peak_threads(), 3);
+  }
+  // Every index still runs once, whatever was free.
+  const ThreadLimit limit(2);
+  std::vector<std::atomic<int>> calls(64);
+  parallel_for(4, 2, [&](int outer) {
+    parallel_chunks(16, 3, [&](std::size_t, std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) ++calls[static_cast<std::size_t>(outer) * 16 + i];
+    });
+  });
+  for (std::size_t i = 0; i < calls.size(); ++i) EXPECT_EQ(calls[i].load(), 1) << i;
 }
 
 // (chunk, begin, end) of every call, sorted by chunk.

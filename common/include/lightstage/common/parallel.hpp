@@ -7,6 +7,12 @@
 // - parallel_for: indices handed out one at a time, for work whose cost varies
 //   by index (image rows); results must not depend on which thread ran which
 //   index. parallel_invoke hands out different tasks the same way.
+// A call made from inside another's work (nested) runs on the threads of the
+// limit (resolve_threads(0)) that no work is running on at its start, and on
+// its caller's alone when none is free: work may nest without the process
+// ever running more threads at once than the limit, or than the outermost
+// call asked for if that is more. Nested work must therefore not wait for
+// work of the same call to start (it may run after it, on the same thread).
 
 #include <cstddef>
 #include <functional>
@@ -45,7 +51,7 @@ int parallel_peak_threads();
 void reset_parallel_peak_threads();
 
 // Calls body(chunk, begin, end) for `chunks` contiguous, in-order ranges that
-// cover [0, count), each on its own thread. Returns the number of chunks used
+// cover [0, count), each on its own thread (nested: as many as are free). Returns the number of chunks used
 // (<= resolved threads, >= 1; one empty chunk when count is 0). Every chunk
 // runs to its end; an exception from a body is rethrown on the caller's thread
 // once all have finished (the first one, by chunk order).
