@@ -135,17 +135,38 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   float depth_low = std::numeric_limits<float>::infinity(), depth_high = -depth_low;
   AngularErrorAccumulator errors;
   const bool scale_albedo = !(sources.albedo_scale > 0) && folder.has_albedo();
-  // The band's error map, and the truth's mask of it.
-  const auto error_rows = [&](const io::SolveFolder& band, int y0, int rows, AngularErrorAccumulator& into) {
-    if (one_band && kept_error) return *kept_error;  // counted into the first pass's accumulator
+  // The band's error map, and the truth's mask of it: computed in the first
+  // pass, where the errors gathered keep their pixel order and the whole
+  // image's mask of them is kept; the later passes replay them from there
+  // (the truth is decoded and the angles computed once).
+  cv::Mat error_valid;
+  std::size_t replayed = 0;  // errors replayed so far in this pass
+  const auto error_rows = [&](const io::SolveFolder& band, int y0, int rows) {
+    if (one_band && kept_error) return *kept_error;
     AngularErrorMap map;
     map.degrees = cv::Mat(rows, size.width, CV_32FC1, cv::Scalar::all(0));
     map.valid = cv::Mat(rows, size.width, CV_8UC1, cv::Scalar::all(0));
     const io::DecodedNormals truth = sources.truth->read(y0, rows);
     const cv::Mat mask =
         sources.truth->mask.empty() ? truth.valid : sources.truth->mask.rowRange(y0, y0 + rows);
-    into.add(band.normals, truth.normals, mask, &map);
+    errors.add(band.normals, truth.normals, mask, &map);
     if (one_band) kept_error = map;
+    if (error_valid.empty()) error_valid = cv::Mat(size, CV_8UC1, cv::Scalar::all(0));
+    map.valid.copyTo(error_valid.rowRange(y0, y0 + rows));
+    return map;
+  };
+  const auto replay_error_rows = [&](int y0, int rows) {
+    if (one_band && kept_error) return *kept_error;
+    AngularErrorMap map;
+    map.degrees = cv::Mat(rows, size.width, CV_32FC1, cv::Scalar::all(0));
+    map.valid = error_valid.rowRange(y0, y0 + rows);
+    const std::vector<double>& gathered = errors.errors();
+    for (int y = 0; y < rows; ++y) {
+      const auto* valid = map.valid.ptr<std::uint8_t>(y);
+      auto* degrees = map.degrees.ptr<float>(y);
+      for (int x = 0; x < size.width; ++x)
+        if (valid[x] != 0) degrees[x] = static_cast<float>(gathered.at(replayed++));
+    }
     return map;
   };
   for_each_band([&](int y0, int rows) {
@@ -164,7 +185,7 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
       if (sources.depth->focal_px > 0) depth_median.count(depth, usable);
     }
     if (sources.truth) {
-      const AngularErrorMap map = error_rows(band, y0, rows, errors);
+      const AngularErrorMap map = error_rows(band, y0, rows);
       error_q.count(map.degrees, map.valid);
     }
   });
@@ -175,10 +196,11 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   io::SolveFolderRows::Wanted gathered;
   gathered.albedo = albedo_q.located();
   gathered.residual = residual_q.located();
-  gathered.normals = error_q.located();  // the error map's
+  gathered.normals = false;  // the error map's are replayed
   gathered.colour = gathered.confidence = gathered.coefficients = false;
   const bool gather_depth = depth_median.located();
-  if (gathered.albedo || gathered.residual || gathered.normals || gather_depth)
+  replayed = 0;
+  if (gathered.albedo || gathered.residual || error_q.located() || gather_depth)
     for_each_band([&](int y0, int rows) {
       const io::SolveFolder band = read_maps(y0, rows, &gathered);
       if (gathered.albedo) albedo_q.gather(band.albedo, band.solved);
@@ -187,14 +209,14 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
         const cv::Mat depth = read_depth(y0, rows);
         depth_median.gather(depth, usable_depth(depth, band.solved));
       }
-      if (gathered.normals) {
-        AngularErrorAccumulator again;
-        const AngularErrorMap map = error_rows(band, y0, rows, again);
+      if (error_q.located()) {
+        const AngularErrorMap map = replay_error_rows(y0, rows);
         error_q.gather(map.degrees, map.valid);
       }
     });
 
   // Pass 3: every picture drawn.
+  replayed = 0;
   out.factor = overview_factor(size, sources.picture_max_pixels);
   const auto overview = [&] { return Overview(size, out.factor); };
   Overview normals = overview(), albedo = overview(), shaded = overview(), depth_colour = overview(),
@@ -213,7 +235,6 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   }
   ErrorPictures error;
   if (sources.truth) {
-    error.stats = errors.stats();
     error.high = nice_ceiling(std::max(error_q.value(), 0.1));
     error.histogram = HistogramCounts(error.high, 40);
   }
@@ -265,8 +286,7 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
       }
     }
     if (sources.truth) {
-      AngularErrorAccumulator again;
-      const AngularErrorMap map = error_rows(band, y0, rows, again);
+      const AngularErrorMap map = replay_error_rows(y0, rows);
       error_map.add(false_colour(map.degrees, map.valid, 0, error.high, kMagnitudeColormap));
       for (int y = 0; y < map.degrees.rows; ++y)
         for (int x = 0; x < map.degrees.cols; ++x)
@@ -285,6 +305,7 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   if (folder.has_confidence()) out.confidence = confidence.finish();
   if (method_map_ok) out.method_map = method_map.finish();
   if (sources.truth) {
+    error.stats = errors.stats();  // sorts the errors: after the last replay
     error.map = error_map.finish();
     out.error = std::move(error);
   }

@@ -6,8 +6,10 @@
 // are scaled by, a second gathers those quantiles exactly (io::BandQuantile),
 // a third draws every picture into its overview (overview.hpp); a result small
 // enough to be one band is read once for all three. Held for the
-// whole image: the solved mask and the ground truth's mask (a byte a pixel)
-// and the compared pixels' errors (a double each, in a vector that grows).
+// whole image: the solved mask, the ground truth's mask and the mask of the
+// compared pixels (a byte a pixel each) and the compared pixels' errors (a
+// double each, in a vector that grows); the later passes draw the error from
+// these, so the ground truth is decoded once.
 
 #include "lightstage/host/eval/angular_error.hpp"
 #include "lightstage/host/io/normal_map.hpp"

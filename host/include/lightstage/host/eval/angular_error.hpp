@@ -45,6 +45,8 @@ class AngularErrorAccumulator {
   void add(const cv::Mat& predicted, const cv::Mat& truth, const cv::Mat& mask = {},
            AngularErrorMap* map = nullptr);
   AngularErrorStats stats();  // sorts the errors gathered (in place: a copy would double them)
+  // The errors gathered, in the order their pixels were added (until stats()).
+  const std::vector<double>& errors() const { return errors_; }
 
  private:
   std::vector<double> errors_;
