@@ -702,9 +702,9 @@ bool writes_pyramids(const ReportOptions& options, std::size_t pixels) {
 }  // namespace
 
 std::size_t report_memory_bytes(int width, int height, const ReportOptions& options) {
-  // Held for the whole image: the solved mask, the ground truth's mask, a double per compared pixel in a
-  // growing vector (up to three while it moves).
-  constexpr std::size_t kWholeImageBytes = 1 + 1 + 24;
+  // Held for the whole image: the solved mask, the ground truth's mask, the compared pixels' mask, a double
+  // per compared pixel in a growing vector (up to three while it moves).
+  constexpr std::size_t kWholeImageBytes = 1 + 1 + 1 + 24;
   // Per picture pixel: eight BGRA pictures, their PNGs and base64 in the page, and the page's copy.
   constexpr std::size_t kPictureBytes = 48;
   // Per viewer pixel: its model (normals, albedo, chroma, up to 10 coefficients) and its payload.
@@ -718,7 +718,7 @@ std::size_t report_memory_bytes(int width, int height, const ReportOptions& opti
   const std::size_t maps =
       pixels * kMapPixelBytesLeast <= options.kept_map_bytes
           ? std::max(kReportBandBytes, std::min(pixels * kMapPixelBytesMost, options.kept_map_bytes))
-          : kReportBandBytes;
+          : 2 * kReportBandBytes;  // a band visited, the next read beside it
   // Pyramids: the level under the picture whole (a quarter of its BGRA pixels) and a strip of tiles, for
   // the normals and the albedo.
   const bool pyramids = writes_pyramids(options, pixels);

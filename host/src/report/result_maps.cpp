@@ -1,14 +1,18 @@
 #include "report/result_maps.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/parallel.hpp"
 #include "lightstage/host/io/solve_output_writer.hpp"
 #include "report/maps.hpp"
 #include "report/overview.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <optional>
+#include <utility>
+#include <vector>
 
 namespace lightstage::report {
 
@@ -103,9 +107,6 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
                                : static_cast<int>(std::clamp<std::size_t>(kReportBandBytes / row_bytes, 1,
                                                                           static_cast<std::size_t>(height)));
   const int step = out.band_rows;
-  const auto for_each_band = [&](auto&& visit) {
-    for (int y = 0; y < height; y += step) visit(y, std::min(step, height - y));
-  };
   // A result read as one band is decoded once: its maps, depth and errors serve every pass.
   const bool one_band = step >= height;
   std::optional<io::SolveFolder> kept_maps;
@@ -120,6 +121,30 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
       return *kept_maps;
     }
     return later ? folder.read(y0, rows, *later, solved.rowRange(y0, y0 + rows)) : folder.read(y0, rows);
+  };
+  // Every band top to bottom: its maps (as read_maps with `later`) and, with
+  // `truth`, its ground truth are read beside the visit of the band before
+  // (two bands held at once, report_memory_bytes).
+  struct BandRead {
+    io::SolveFolder maps;
+    io::DecodedNormals truth;
+  };
+  const auto for_each_band = [&](const io::SolveFolderRows::Wanted* later, bool truth, auto&& visit) {
+    const auto read = [&](int y0, int rows) {
+      BandRead band{read_maps(y0, rows, later), {}};
+      if (truth && !(one_band && kept_error)) band.truth = sources.truth->read(y0, rows);
+      return band;
+    };
+    std::optional<BandRead> current;
+    for (int y = 0; y < height; y += step) {
+      const int rows = std::min(step, height - y), next_y = y + step;
+      if (!current) current = read(y, rows);
+      std::optional<BandRead> next;
+      std::vector<std::function<void()>> tasks{[&] { visit(y, rows, *current); }};
+      if (next_y < height) tasks.emplace_back([&] { next = read(next_y, std::min(step, height - next_y)); });
+      parallel_invoke(tasks, 0);
+      current = std::move(next);
+    }
   };
   const auto read_depth = [&](int y0, int rows) {
     if (one_band && !kept_depth.empty()) return kept_depth;
@@ -141,12 +166,12 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   // (the truth is decoded and the angles computed once).
   cv::Mat error_valid;
   std::size_t replayed = 0;  // errors replayed so far in this pass
-  const auto error_rows = [&](const io::SolveFolder& band, int y0, int rows) {
+  const auto error_rows = [&](const io::SolveFolder& band, const io::DecodedNormals& truth, int y0,
+                              int rows) {
     if (one_band && kept_error) return *kept_error;
     AngularErrorMap map;
     map.degrees = cv::Mat(rows, size.width, CV_32FC1, cv::Scalar::all(0));
     map.valid = cv::Mat(rows, size.width, CV_8UC1, cv::Scalar::all(0));
-    const io::DecodedNormals truth = sources.truth->read(y0, rows);
     const cv::Mat mask =
         sources.truth->mask.empty() ? truth.valid : sources.truth->mask.rowRange(y0, y0 + rows);
     errors.add(band.normals, truth.normals, mask, &map);
@@ -169,8 +194,8 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
     }
     return map;
   };
-  for_each_band([&](int y0, int rows) {
-    const io::SolveFolder band = read_maps(y0, rows, nullptr);
+  for_each_band(nullptr, sources.truth != nullptr, [&](int y0, int rows, const BandRead& read) {
+    const io::SolveFolder& band = read.maps;
     viewer.add(band, y0);
     band.solved.copyTo(solved.rowRange(y0, y0 + rows));
     if (scale_albedo) albedo_q.count(band.albedo, band.solved);
@@ -185,7 +210,7 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
       if (sources.depth->focal_px > 0) depth_median.count(depth, usable);
     }
     if (sources.truth) {
-      const AngularErrorMap map = error_rows(band, y0, rows);
+      const AngularErrorMap map = error_rows(band, read.truth, y0, rows);
       error_q.count(map.degrees, map.valid);
     }
   });
@@ -201,8 +226,8 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   const bool gather_depth = depth_median.located();
   replayed = 0;
   if (gathered.albedo || gathered.residual || error_q.located() || gather_depth)
-    for_each_band([&](int y0, int rows) {
-      const io::SolveFolder band = read_maps(y0, rows, &gathered);
+    for_each_band(&gathered, false, [&](int y0, int rows, const BandRead& read) {
+      const io::SolveFolder& band = read.maps;
       if (gathered.albedo) albedo_q.gather(band.albedo, band.solved);
       if (gathered.residual) residual_q.gather(band.residual, band.solved);
       if (gather_depth) {
@@ -248,8 +273,8 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   }
   io::SolveFolderRows::Wanted drawn;
   drawn.coefficients = false;
-  for_each_band([&](int y0, int rows) {
-    const io::SolveFolder band = read_maps(y0, rows, &drawn);
+  for_each_band(&drawn, false, [&](int y0, int rows, const BandRead& read) {
+    const io::SolveFolder& band = read.maps;
     const cv::Mat normal_picture = normal_colours(band.normals, band.solved);
     normals.add(normal_picture);
     const cv::Mat grey_albedo =
