@@ -54,14 +54,15 @@ int reserve_helpers(int wanted) {
 // several workers one after the other. Joins them all. `worker` must not throw.
 void run_workers(std::size_t count, const std::function<void(std::size_t)>& worker) {
   const bool outermost = !inside_parallel_work;
+  std::vector<std::thread> threads;
+  threads.reserve(count -
+                  1);  // before the threads are counted busy: nothing below throws but a thread's start
   const auto helpers = static_cast<std::size_t>(reserve_helpers(static_cast<int>(count) - 1));
   const std::size_t stride = helpers + 1;
   const auto run_share = [&worker, count, stride](std::size_t first) {
     inside_parallel_work = true;
     for (std::size_t w = first; w < count; w += stride) worker(w);
   };
-  std::vector<std::thread> threads;
-  threads.reserve(helpers);
   for (std::size_t h = 1; h <= helpers; ++h) {
     count_helper(+1);
     threads.emplace_back([&run_share, h] {

@@ -29,7 +29,11 @@ void directions_and_distances(const NearLights& near, std::size_t pixel, Eigen::
 }  // namespace
 
 Eigen::VectorXd near_light_reference(const NearLights& near) {
-  return (near.led_positions_mm.rowwise() - near.object_centre_mm.transpose()).rowwise().squaredNorm();
+  const Eigen::MatrixX3d& leds = near.led_positions_mm;
+  const Eigen::Vector3d& c = near.object_centre_mm;
+  const auto cx = leds.col(0).array() - c.x(), cy = leds.col(1).array() - c.y(),
+             cz = leds.col(2).array() - c.z();
+  return cx * cx + cy * cy + cz * cz;
 }
 
 void near_light_directions(const NearLights& near, const Eigen::VectorXd& reference, std::size_t pixel,
@@ -40,12 +44,7 @@ void near_light_directions(const NearLights& near, const Eigen::VectorXd& refere
 
 void near_light_directions(const NearLights& near, std::size_t pixel, Eigen::MatrixX3d& directions,
                            Eigen::VectorXd& gains) {
-  directions_and_distances(near, pixel, directions, gains);
-  const Eigen::MatrixX3d& leds = near.led_positions_mm;
-  const Eigen::Vector3d& c = near.object_centre_mm;
-  const auto cx = leds.col(0).array() - c.x(), cy = leds.col(1).array() - c.y(),
-             cz = leds.col(2).array() - c.z();
-  gains = (cx * cx + cy * cy + cz * cz) / gains.array();
+  near_light_directions(near, near_light_reference(near), pixel, directions, gains);
 }
 
 Eigen::MatrixX3d points_on_plane(const std::vector<cv::Point>& pixels, const PixelRay& ray, double plane_z_mm,

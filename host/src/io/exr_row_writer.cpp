@@ -1,7 +1,7 @@
 // EXR scanlines through OpenEXR, as write_exr writes the whole image: float
 // channels, uncompressed, rows in increasing y; the line offset table is
 // written when the file is complete. Uncompressed: ZIP made float maps only
-// about a fifth smaller for more CPU than their solve (docs/large-captures.md).
+// about a fifth smaller for more CPU than their solve (docs/stack-format.md).
 #include "lightstage/common/error.hpp"
 #include "lightstage/host/io/row_writer.hpp"
 #include "util/atomic_file.hpp"

@@ -717,7 +717,7 @@ std::size_t report_memory_bytes(int width, int height, const ReportOptions& opti
       static_cast<std::size_t>(std::max(width, 0)) * static_cast<std::size_t>(std::max(height, 0));
   const std::size_t maps =
       pixels * kMapPixelBytesLeast <= options.kept_map_bytes
-          ? std::max(kReportBandBytes, std::min(pixels * kMapPixelBytesMost, options.kept_map_bytes))
+          ? std::max(2 * kReportBandBytes, std::min(pixels * kMapPixelBytesMost, options.kept_map_bytes))
           : 2 * kReportBandBytes;  // a band visited, the next read beside it
   // Pyramids: the level under the picture whole (a quarter of its BGRA pixels) and a strip of tiles, for
   // the normals and the albedo.
@@ -768,8 +768,8 @@ std::string render_report(const fs::path& result_dir, const ReportOptions& optio
     claim_page_folder(pyramid_dir);
     sources.pyramid_dir = pyramid_dir;
     sources.pyramid.format = options.pyramid_format;
-    // Every core even when the sections take one at a time: a tile row is held
-    // whatever the threads, and each tile's encoding needs only its own few hundred kB.
+    // Every core free (in bands, a core reads the next band beside the drawing):
+    // a tile row is held whatever the threads, and each tile's encoding needs only its own few hundred kB.
     sources.pyramid.threads = 0;
   }
   sources.albedo_scale = in.summary.value(

@@ -132,7 +132,7 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
   const auto for_each_band = [&](const io::SolveFolderRows::Wanted* later, bool truth, auto&& visit) {
     const auto read = [&](int y0, int rows) {
       BandRead band{read_maps(y0, rows, later), {}};
-      if (truth && !(one_band && kept_error)) band.truth = sources.truth->read(y0, rows);
+      if (truth) band.truth = sources.truth->read(y0, rows);
       return band;
     };
     std::optional<BandRead> current;
@@ -175,7 +175,10 @@ ResultPictures draw_result_maps(MapSources& sources, std::vector<std::string>& n
     const cv::Mat mask =
         sources.truth->mask.empty() ? truth.valid : sources.truth->mask.rowRange(y0, y0 + rows);
     errors.add(band.normals, truth.normals, mask, &map);
-    if (one_band) kept_error = map;
+    if (one_band) {
+      kept_error = map;
+      return map;
+    }
     if (error_valid.empty()) error_valid = cv::Mat(size, CV_8UC1, cv::Scalar::all(0));
     map.valid.copyTo(error_valid.rowRange(y0, y0 + rows));
     return map;

@@ -186,7 +186,7 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
       for (Eigen::Index j = 0; j < images; ++j) {
         const double w = weight[static_cast<std::size_t>(j)];
         const double v = w != 0 ? static_cast<double>(row(j)) : 0.0;
-        const double x = w * lx[j], y = w * ly[j], z = w * lz[j];
+        const double x = w != 0 ? lx[j] : 0.0, y = w != 0 ? ly[j] : 0.0, z = w != 0 ? lz[j] : 0.0;
         gxx += x * lx[j];
         gxy += x * ly[j];
         gxz += x * lz[j];

@@ -69,11 +69,10 @@ double PixelErrorPredictor::predict(const PixelObservations& data, const Eigen::
   std::size_t inliers = 0;
   for (std::size_t j = 0; j < count; ++j) {
     const bool inlier = lit_[j] && misfit_[j] <= cut;
-    const double w = inlier ? 1.0 : 0.0;
-    // An outlier's value and residual may not be finite: neither is read.
+    // An outlier's light, value and residual are not read (any may not be finite).
     const double r = inlier ? std::max(misfit_[j], floor) : 0.0;
     const double v = inlier ? values[j] : 0.0;
-    const double x = w * lx[j], y = w * ly[j], z = w * lz[j];
+    const double x = inlier ? lx[j] : 0.0, y = inlier ? ly[j] : 0.0, z = inlier ? lz[j] : 0.0;
     const double outer[6] = {x * lx[j], x * ly[j], x * lz[j], y * ly[j], y * lz[j], z * lz[j]};
     for (int k = 0; k < 6; ++k) {
       m[k] += outer[k];

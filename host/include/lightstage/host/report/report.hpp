@@ -80,7 +80,7 @@ struct ReportSummary {
 
 // An upper bound of the memory write_report takes (beside the program) for a
 // result of `width` × `height` pixels: what it holds for the whole image (the
-// solved and ground-truth masks, the compared pixels' errors), a band of rows,
+// solved, ground-truth and compared masks, the compared pixels' errors), two bands of rows,
 // the pictures and viewer data at their page budgets, and the page itself.
 std::size_t report_memory_bytes(int width, int height, const ReportOptions& options = {});
 
