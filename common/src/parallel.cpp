@@ -55,8 +55,8 @@ int reserve_helpers(int wanted) {
 void run_workers(std::size_t count, const std::function<void(std::size_t)>& worker) {
   const bool outermost = !inside_parallel_work;
   std::vector<std::thread> threads;
-  threads.reserve(count -
-                  1);  // before the threads are counted busy: nothing below throws but a thread's start
+  // Reserved before the threads are counted busy: below, only a thread's start can throw.
+  threads.reserve(count - 1);
   const auto helpers = static_cast<std::size_t>(reserve_helpers(static_cast<int>(count) - 1));
   const std::size_t stride = helpers + 1;
   const auto run_share = [&worker, count, stride](std::size_t first) {
