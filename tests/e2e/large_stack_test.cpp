@@ -27,7 +27,7 @@ TEST(LargeStack, SolveKeepsWithinTheMemoryLimitWithTheWholeImageResult) {
   LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("test_pipeline_solve_bands (the same bands, compared map by map)");
   const fs::path dir = testing::scratch_dir();
   const fs::path stack = dir / "stack";
-  // 96 frames of 768x768, 16-bit grey: 113 MB decoded, about 780 MB resident to solve whole.
+  // 96 frames of 768x768, 16-bit grey: 113 MB decoded, about 430 MB resident to solve whole.
   auto r = testing::run_lightstage({"simulate", "--quiet", "--rig",
                                     (testing::source_dir() / "hw/rigs/sim-dome.yaml").string(), "--scene",
                                     "bumps", "--width", "768", "--height", "768", "--out", stack.string()});
@@ -62,10 +62,10 @@ TEST(LargeStack, TheBiQuadraticSolveAndItsRelightingRefitKeepWithinTheLimitToo) 
   LIGHTSTAGE_MEASURED_IN_RELEASE_ONLY("test_pipeline_solve_bands (the same bands, compared map by map)");
   const fs::path dir = testing::scratch_dir();
   const fs::path stack = dir / "stack";
-  // 96 frames of 512x512, 16-bit grey with a highlight: about 260 MB resident to solve whole.
+  // 96 frames of 640x640, 16-bit grey with a highlight: about 300 MB resident to solve whole.
   auto r = testing::run_lightstage(
       {"simulate", "--quiet", "--rig", (testing::source_dir() / "hw/rigs/sim-dome.yaml").string(), "--scene",
-       "shiny-sphere", "--width", "512", "--height", "512", "--out", stack.string()});
+       "shiny-sphere", "--width", "640", "--height", "640", "--out", stack.string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
 
   const std::size_t limit = std::size_t{200} << 20;
@@ -75,7 +75,7 @@ TEST(LargeStack, TheBiQuadraticSolveAndItsRelightingRefitKeepWithinTheLimitToo) 
   const auto whole = testing::run_lightstage({"solve", "--quiet", "--input", stack.string(), "--method",
                                               "biquadratic", "--out", (dir / "whole").string()});
   ASSERT_EQ(whole.exit_code, 0) << whole.err;
-  std::printf("512x512x96 biquadratic: whole %.0f MB, bands under --memory-limit 200M %.0f MB\n",
+  std::printf("640x640x96 biquadratic: whole %.0f MB, bands under --memory-limit 200M %.0f MB\n",
               whole.peak_rss_bytes / 1e6, r.peak_rss_bytes / 1e6);
   RecordProperty("whole_rss_mb", fmt::format("{:.0f}", whole.peak_rss_bytes / 1e6));
   RecordProperty("banded_rss_mb", fmt::format("{:.0f}", r.peak_rss_bytes / 1e6));
