@@ -2,14 +2,15 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/huge_pages.hpp"
+#include "lightstage/common/lane_sort.hpp"
 #include "lightstage/common/parallel.hpp"
-#include "lightstage/common/select_kth.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 
 namespace lightstage {
 namespace {
@@ -104,41 +105,77 @@ void convert_frame(const FrameConstants& k, const std::vector<cv::Point>& pixels
 // instead writes one value per cache line across the full matrices.
 constexpr std::size_t kPixelBlock = 256;
 
-// The chroma of one pixel (radiometry.hpp) from its frames' linear (r, g, b).
-Eigen::RowVector3f pixel_chroma(const float* rgb, const bool* saturated, std::size_t frame_count,
-                                std::array<std::vector<float>, 3>& ratios) {
-  const auto grey = [&](std::size_t j) {
-    const float* v = rgb + j * 3;
-    return kRed * v[0] + kGreen * v[1] + kBlue * v[2];
-  };
-  double brightest = 0;
-  for (std::size_t j = 0; j < frame_count; ++j)
-    if (!saturated[j]) brightest = std::max(brightest, grey(j));
-  for (auto& r : ratios) r.clear();
-  if (brightest > 0) {
-    for (std::size_t j = 0; j < frame_count; ++j) {
-      const double y = grey(j);
-      if (saturated[j] || !(y >= kChromaMinShare * brightest)) continue;
-      for (int c = 0; c < 3; ++c) ratios[c].push_back(static_cast<float>(rgb[j * 3 + c] / y));
+// The chroma (radiometry.hpp) of LaneSort::kLanes pixels at a time from
+// their frames' linear (r, g, b): each pixel's ratios fill one lane, and the
+// three channels' medians come from one sort of each.
+class ChromaLanes {
+ public:
+  static constexpr std::size_t kLanes = LaneSort::kLanes;
+
+  explicit ChromaLanes(std::size_t frame_count)
+      : frame_count_(frame_count), sort_(frame_count), ratios_(3 * sort_.slots(frame_count) * kLanes) {}
+
+  // Pixels [0, count), count ≤ kLanes: rgb at (pixel · frame_count + frame) · 3,
+  // saturated at pixel · frame_count + frame; chroma (r, g, b) to out + pixel · 3.
+  void compute(const float* rgb, const bool* saturated, std::size_t count, float* out) {
+    const std::size_t stride = sort_.slots(frame_count_) * kLanes;  // one channel's values
+    std::array<std::size_t, kLanes> lengths{};
+    for (std::size_t lane = 0; lane < count; ++lane)
+      lengths[lane] = fill_lane(rgb + lane * frame_count_ * 3, saturated + lane * frame_count_, lane);
+    const std::size_t slots = sort_.slots(*std::max_element(lengths.begin(), lengths.end()));
+    for (std::size_t lane = 0; lane < kLanes; ++lane)
+      for (std::size_t i = lengths[lane]; i < slots; ++i)
+        for (int c = 0; c < 3; ++c) ratios_[c * stride + i * kLanes + lane] = kPadding;
+    for (int c = 0; c < 3; ++c) sort_.sort(ratios_.data() + c * stride, slots);
+    for (std::size_t lane = 0; lane < count; ++lane) {
+      float* chroma = out + lane * 3;
+      const std::size_t length = lengths[lane];
+      Eigen::RowVector3d median;
+      for (int c = 0; c < 3; ++c)
+        median[c] = length == 0 ? 0.0 : std::max(0.0f, ratios_[c * stride + length / 2 * kLanes + lane]);
+      const double median_grey = kRed * median[0] + kGreen * median[1] + kBlue * median[2];
+      // Never lit, or lit to no colour: neutral.
+      for (int c = 0; c < 3; ++c)
+        chroma[c] = median_grey > 0 ? static_cast<float>(median[c] / median_grey) : 1.0f;
     }
   }
-  if (ratios[0].empty()) return Eigen::RowVector3f::Ones();  // never lit: neutral
-  Eigen::RowVector3d chroma;
-  for (int c = 0; c < 3; ++c) {
-    auto& r = ratios[c];
-    const auto size = static_cast<std::ptrdiff_t>(r.size());
-    chroma[c] = std::max(0.0f, select_kth(r.data(), size, size / 2));
+
+ private:
+  static constexpr float kPadding = std::numeric_limits<float>::infinity();
+
+  // One pixel's ratios, channel by channel, into `lane`; returns how many.
+  std::size_t fill_lane(const float* rgb, const bool* saturated, std::size_t lane) {
+    const std::size_t stride = sort_.slots(frame_count_) * kLanes;
+    const auto grey = [&](std::size_t j) {
+      const float* v = rgb + j * 3;
+      return kRed * v[0] + kGreen * v[1] + kBlue * v[2];
+    };
+    double brightest = 0;
+    for (std::size_t j = 0; j < frame_count_; ++j)
+      if (!saturated[j]) brightest = std::max(brightest, grey(j));
+    if (!(brightest > 0)) return 0;
+    std::size_t length = 0;
+    for (std::size_t j = 0; j < frame_count_; ++j) {
+      const double y = grey(j);
+      if (saturated[j] || !(y >= kChromaMinShare * brightest)) continue;
+      for (int c = 0; c < 3; ++c)
+        ratios_[c * stride + length * kLanes + lane] = static_cast<float>(rgb[j * 3 + c] / y);
+      ++length;
+    }
+    return length;
   }
-  const double chroma_grey = kRed * chroma[0] + kGreen * chroma[1] + kBlue * chroma[2];
-  if (!(chroma_grey > 0)) return Eigen::RowVector3f::Ones();
-  return (chroma / chroma_grey).cast<float>();
-}
+
+  std::size_t frame_count_;
+  LaneSort sort_;
+  std::vector<float> ratios_;  // [channel][slot][lane]
+};
 
 template <typename T, bool kColour>
 void convert_pixels(const std::vector<FrameConstants>& frames, const std::vector<cv::Point>& pixels,
                     std::size_t begin, std::size_t end, bool clamp_to_one, Observations& obs) {
   std::vector<float> rgb(kColour ? kPixelBlock * frames.size() * 3 : 0);
-  std::array<std::vector<float>, 3> ratios;
+  std::optional<ChromaLanes> chroma;
+  if constexpr (kColour) chroma.emplace(frames.size());
   for (std::size_t block = begin; block < end; block += kPixelBlock) {
     const std::size_t block_end = std::min(end, block + kPixelBlock);
     for (std::size_t j = 0; j < frames.size(); ++j)
@@ -146,10 +183,10 @@ void convert_pixels(const std::vector<FrameConstants>& frames, const std::vector
                                 static_cast<Eigen::Index>(j), obs.intensities, obs.saturated, rgb.data(),
                                 frames.size());
     if constexpr (kColour) {
-      for (std::size_t p = block; p < block_end; ++p) {
+      for (std::size_t p = block; p < block_end; p += ChromaLanes::kLanes) {
         const auto row = static_cast<Eigen::Index>(p);
-        obs.chroma.row(row) = pixel_chroma(rgb.data() + (p - block) * frames.size() * 3,
-                                           obs.saturated.row(row).data(), frames.size(), ratios);
+        chroma->compute(rgb.data() + (p - block) * frames.size() * 3, obs.saturated.row(row).data(),
+                        std::min(ChromaLanes::kLanes, block_end - p), obs.chroma.row(row).data());
       }
     }
   }

@@ -44,6 +44,20 @@ const ImageStack& images() {
   return stack;
 }
 
+// The same sphere in colour (a tint per patch): what the chroma costs.
+const ImageStack& colour_images() {
+  static const ImageStack stack = [] {
+    sim::SimulateOptions options;
+    options.scene = "sphere";
+    options.material = "cook-torrance:roughness=0.3,ks=0.5";
+    options.colour = "patches";
+    options.light_model = sim::LightModel::kDistant;
+    options.width = options.height = 192;
+    return sim::simulate_stack(load_rig(default_rig_path()), options);
+  }();
+  return stack;
+}
+
 const Observations& stack() {
   static const Observations observations = make_observations(images());
   return observations;
@@ -103,6 +117,16 @@ void BM_MakeObservations(benchmark::State& state) {
   report(state);
 }
 BENCHMARK(BM_MakeObservations)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The same from 16-bit RGB frames, each pixel's chroma (medians of its
+// channels' ratios) included.
+void BM_MakeObservationsColour(benchmark::State& state) {
+  RadiometryOptions options;
+  options.threads = kThreads;
+  for (auto _ : state) benchmark::DoNotOptimize(make_observations(colour_images(), options));
+  report(state);
+}
+BENCHMARK(BM_MakeObservationsColour)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_L2(benchmark::State& state) {
   L2Options options;

@@ -4,6 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <random>
+#include <vector>
+
 namespace lightstage {
 namespace {
 
@@ -78,6 +83,70 @@ TEST(HostRadiometry, ChromaIsTheMedianColourOfTheLitFramesAndIgnoresAWhiteHighli
   EXPECT_FLOAT_EQ(image.at<cv::Vec3f>(0, 0)[0], obs.chroma(0, 2));
   EXPECT_FLOAT_EQ(image.at<cv::Vec3f>(0, 0)[2], obs.chroma(0, 0));
   EXPECT_EQ(image.at<cv::Vec3f>(0, 1), cv::Vec3f(0, 0, 0));
+}
+
+// Pixels whose ratios number differently (a dark pixel, one lit by a few
+// frames, clipped frames, channels that tie) in one stack, several to a
+// vector lane group and a group left part empty: each pixel's chroma is the
+// definition's, the per-channel median (nth_element) of its counted frames.
+TEST(HostRadiometry, EveryPixelsChromaIsTheMedianOfItsOwnCountedFrames) {
+  constexpr int kWidth = 13, kHeight = 3, kFrames = 40;  // 39 pixels: four groups of 8 and 7
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> level(0, 65535);
+  ImageStack stack;
+  for (int i = 0; i < kFrames; ++i) {
+    Frame frame;
+    frame.filename = "f" + std::to_string(i);
+    frame.image = cv::Mat(kHeight, kWidth, CV_16UC3);
+    frame.light_direction = Vec3(std::cos(i), std::sin(i), 1.0);
+    for (int y = 0; y < kHeight; ++y) {
+      for (int x = 0; x < kWidth; ++x) {
+        cv::Vec3w& px = frame.image.at<cv::Vec3w>(y, x);
+        const int pixel = y * kWidth + x;
+        for (int c = 0; c < 3; ++c)
+          px[c] = static_cast<std::uint16_t>(level(rng) >> (pixel % 5 == 0 ? 12 : 0));
+        if (pixel % 7 == 0 && i % (1 + pixel % 9) != 0) px = cv::Vec3w(0, 0, 0);  // lit by a few frames
+        if (pixel % 4 == 1) px[1] = px[2];                                        // ties
+        if (pixel == 0) px = cv::Vec3w(0, 0, 0);                                  // never lit
+      }
+    }
+    stack.frames.push_back(frame);
+  }
+  const Observations obs = make_observations(stack);
+  ASSERT_EQ(obs.chroma.rows(), kWidth * kHeight);
+  for (Eigen::Index p = 0; p < obs.chroma.rows(); ++p) {
+    const cv::Point at = obs.pixels[static_cast<std::size_t>(p)];
+    std::vector<double> grey(kFrames);
+    double brightest = 0;
+    for (int j = 0; j < kFrames; ++j) {
+      const cv::Vec3w px = stack.frames[static_cast<std::size_t>(j)].image.at<cv::Vec3w>(at);
+      grey[static_cast<std::size_t>(j)] = kR * static_cast<float>(px[2] * (1.0 / 65535.0)) +
+                                          kG * static_cast<float>(px[1] * (1.0 / 65535.0)) +
+                                          kB * static_cast<float>(px[0] * (1.0 / 65535.0));
+      if (!obs.saturated(p, j)) brightest = std::max(brightest, grey[static_cast<std::size_t>(j)]);
+    }
+    std::array<std::vector<float>, 3> ratios;
+    for (int j = 0; j < kFrames && brightest > 0; ++j) {
+      const double y = grey[static_cast<std::size_t>(j)];
+      if (obs.saturated(p, j) || !(y >= kChromaMinShare * brightest)) continue;
+      const cv::Vec3w px = stack.frames[static_cast<std::size_t>(j)].image.at<cv::Vec3w>(at);
+      for (int c = 0; c < 3; ++c)
+        ratios[static_cast<std::size_t>(c)].push_back(
+            static_cast<float>(static_cast<float>(px[2 - c] * (1.0 / 65535.0)) / y));
+    }
+    Eigen::RowVector3f expected = Eigen::RowVector3f::Ones();
+    if (!ratios[0].empty()) {
+      Eigen::RowVector3d median;
+      for (int c = 0; c < 3; ++c) {
+        auto& r = ratios[static_cast<std::size_t>(c)];
+        std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2), r.end());
+        median[c] = std::max(0.0f, r[r.size() / 2]);
+      }
+      const double median_grey = kR * median[0] + kG * median[1] + kB * median[2];
+      if (median_grey > 0) expected = (median / median_grey).cast<float>();
+    }
+    EXPECT_EQ(obs.chroma.row(p), expected) << "pixel " << p;
+  }
 }
 
 TEST(HostRadiometry, GreyStacksHaveNoChroma) {
