@@ -1,5 +1,6 @@
 #include "lightstage/host/solvers/lambertian.hpp"
 
+#include "lightstage/common/double_pair.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/parallel.hpp"
 #include "lightstage/host/solvers/normal_confidence.hpp"
@@ -177,26 +178,40 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
         ++counters.too_few;
         continue;
       }
-      // The normal equations, a light at a time over the lights' columns; a
-      // light left out adds exact zeros (its value, maybe not finite, is not read).
+      // The normal equations, two lights at a time (a vector's lanes) over the
+      // lights' columns; a light left out adds exact zeros (its value, maybe
+      // not finite, is not read).
       const double* lx = data.lights.col(0).data();
       const double* ly = data.lights.col(1).data();
       const double* lz = data.lights.col(2).data();
-      double gxx = 0, gxy = 0, gxz = 0, gyy = 0, gyz = 0, gzz = 0, bx = 0, by = 0, bz = 0;
-      for (Eigen::Index j = 0; j < images; ++j) {
-        const double w = weight[static_cast<std::size_t>(j)];
-        const double v = w != 0 ? static_cast<double>(row(j)) : 0.0;
-        const double x = w != 0 ? lx[j] : 0.0, y = w != 0 ? ly[j] : 0.0, z = w != 0 ? lz[j] : 0.0;
-        gxx += x * lx[j];
-        gxy += x * ly[j];
-        gxz += x * lz[j];
-        gyy += y * ly[j];
-        gyz += y * lz[j];
-        gzz += z * lz[j];
-        bx += x * v;
-        by += y * v;
-        bz += z * v;
-      }
+      const float* values = row.data();
+      const DoublePair zero = {};
+      DoublePair g[6] = {}, b[3] = {};
+      const auto add = [&](const DoublePair w, const DoublePair lxj, const DoublePair lyj,
+                           const DoublePair lzj, const DoublePair value) {
+        const auto selected = w != zero;
+        const DoublePair x = selected ? lxj : zero, y = selected ? lyj : zero, z = selected ? lzj : zero;
+        const DoublePair v = selected ? value : zero;
+        g[0] += x * lxj;
+        g[1] += x * lyj;
+        g[2] += x * lzj;
+        g[3] += y * lyj;
+        g[4] += y * lzj;
+        g[5] += z * lzj;
+        b[0] += x * v;
+        b[1] += y * v;
+        b[2] += z * v;
+      };
+      Eigen::Index j = 0;
+      for (; j + 2 <= images; j += 2)
+        add(load_pair(weight.data() + j), load_pair(lx + j), load_pair(ly + j), load_pair(lz + j),
+            load_pair(values + j));
+      if (j < images)  // the last light, in the first lane
+        add(DoublePair{weight[static_cast<std::size_t>(j)], 0.0}, DoublePair{lx[j], 0.0},
+            DoublePair{ly[j], 0.0}, DoublePair{lz[j], 0.0}, DoublePair{static_cast<double>(values[j]), 0.0});
+      const double gxx = lane_sum(g[0]), gxy = lane_sum(g[1]), gxz = lane_sum(g[2]), gyy = lane_sum(g[3]),
+                   gyz = lane_sum(g[4]), gzz = lane_sum(g[5]);
+      const double bx = lane_sum(b[0]), by = lane_sum(b[1]), bz = lane_sum(b[2]);
       Eigen::Matrix3d gram;
       gram << gxx, gxy, gxz, gxy, gyy, gyz, gxz, gyz, gzz;
       const Eigen::Vector3d rhs(bx, by, bz);
@@ -209,11 +224,16 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
       }
       const Eigen::Matrix3d& v = eigen.eigenvectors();
       const Eigen::Vector3d s = v * (v.transpose() * rhs).cwiseQuotient(lambda);
-      double squared = 0;
-      for (Eigen::Index j = 0; j < images; ++j) {
-        const double w = weight[static_cast<std::size_t>(j)];
-        const double r =
-            w != 0 ? lx[j] * s.x() + ly[j] * s.y() + lz[j] * s.z() - static_cast<double>(row(j)) : 0.0;
+      const DoublePair sx = {s.x(), s.x()}, sy = {s.y(), s.y()}, sz = {s.z(), s.z()};
+      DoublePair squares = {};
+      for (j = 0; j + 2 <= images; j += 2) {
+        const DoublePair fitted = load_pair(lx + j) * sx + load_pair(ly + j) * sy + load_pair(lz + j) * sz;
+        const DoublePair r = load_pair(weight.data() + j) != zero ? fitted - load_pair(values + j) : zero;
+        squares += r * r;
+      }
+      double squared = lane_sum(squares);
+      if (j < images && weight[static_cast<std::size_t>(j)] != 0) {
+        const double r = lx[j] * s.x() + ly[j] * s.y() + lz[j] * s.z() - static_cast<double>(values[j]);
         squared += r * r;
       }
       if (store(s, std::sqrt(squared / static_cast<double>(count)), obs.pixels[p], maps)) {

@@ -1,5 +1,6 @@
 #include "lightstage/host/solvers/normal_confidence.hpp"
 
+#include "lightstage/common/double_pair.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/geometry.hpp"
 #include "lightstage/common/parallel.hpp"
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -21,6 +23,8 @@ namespace {
 // Inliers whose Gram matrix is this close to singular (smallest over largest
 // eigenvalue) leave the normal undetermined.
 constexpr double kMinEigenvalueRatio = 1e-6;
+
+using Pair = DoublePair;
 
 }  // namespace
 
@@ -33,12 +37,12 @@ double PixelErrorPredictor::predict(const PixelObservations& data, const Eigen::
   if (misfit_.size() < count) {
     misfit_.resize(count);
     magnitude_.resize(count);
-    lit_.resize(count);
   }
   const double* lx = data.lights.col(0).data();
   const double* ly = data.lights.col(1).data();
   const double* lz = data.lights.col(2).data();
   const double* values = data.values.data();
+  const double not_counted = std::numeric_limits<double>::quiet_NaN();
   // Written whatever the test says, kept by advancing: no branch to mispredict.
   std::size_t lit = 0;
   double lit_sum = 0;
@@ -47,9 +51,10 @@ double PixelErrorPredictor::predict(const PixelObservations& data, const Eigen::
     const double shading = lx[j] * n.x() + ly[j] * n.y() + lz[j] * n.z();
     const double misfit = std::abs(value - albedo * shading);
     // Lit, and not from behind the answer (the model has no slope there).
-    const bool counted = data.usable[j] && value > options.shadow_threshold && shading > 0;
-    lit_[j] = counted;
-    misfit_[j] = misfit;
+    // Bitwise, not short-circuit: all three are cheap, and a branch on each would mispredict.
+    const bool counted = (data.usable[j] != 0) & (value > options.shadow_threshold) & (shading > 0);
+    // NaN compares false against any cut, an infinite one too.
+    misfit_[j] = counted ? misfit : not_counted;
     magnitude_[lit] = misfit;
     lit += counted ? 1 : 0;
     lit_sum += counted ? value : 0.0;
@@ -63,30 +68,61 @@ double PixelErrorPredictor::predict(const PixelObservations& data, const Eigen::
                          ? infinite
                          : std::max(floor, options.trim * select_kth(magnitude_.data(),
                                                                      static_cast<std::ptrdiff_t>(lit), half));
-  // The inliers' sums, a light at a time (an outlier adds exact zeros):
-  // M = Σ l lᵀ, S = Σ r² l lᵀ with r the residual's floored magnitude, and Σ v l.
-  double m[6] = {}, sandwich[6] = {}, moment[3] = {};
-  std::size_t inliers = 0;
-  for (std::size_t j = 0; j < count; ++j) {
-    const bool inlier = lit_[j] && misfit_[j] <= cut;
-    // An outlier's light, value and residual are not read (any may not be finite).
-    const double r = inlier ? std::max(misfit_[j], floor) : 0.0;
-    const double v = inlier ? values[j] : 0.0;
-    const double x = inlier ? lx[j] : 0.0, y = inlier ? ly[j] : 0.0, z = inlier ? lz[j] : 0.0;
-    const double outer[6] = {x * lx[j], x * ly[j], x * lz[j], y * ly[j], y * lz[j], z * lz[j]};
-    for (int k = 0; k < 6; ++k) {
-      m[k] += outer[k];
-      sandwich[k] += r * r * outer[k];
-    }
-    moment[0] += x * v;
-    moment[1] += y * v;
-    moment[2] += z * v;
-    inliers += inlier ? 1 : 0;
+  // The inliers' sums, two lights at a time (a vector's lanes): M = Σ l lᵀ,
+  // Σ v l, and then S = Σ r² l lᵀ with r the residual's floored magnitude.
+  // An outlier adds exact zeros; its value and residual are not read (either
+  // may not be finite). Sums held in registers, so S takes a loop of its own.
+  Pair m[6] = {}, moment[3] = {}, inliers = {};
+  double* squared = magnitude_.data();  // r² (0 for an outlier), the median taken
+  const Pair cut2 = {cut, cut}, floor2 = {floor, floor}, zero = {}, one = {1.0, 1.0};
+  const auto add = [&](const Pair lxj, const Pair lyj, const Pair lzj, const Pair misfit, const Pair v) {
+    const auto inlier = misfit <= cut2;
+    const Pair r = inlier ? (misfit < floor2 ? floor2 : misfit) : zero;
+    const Pair x = inlier ? lxj : zero, y = inlier ? lyj : zero, z = inlier ? lzj : zero;
+    const Pair kept_v = inlier ? v : zero;
+    m[0] += x * lxj;
+    m[1] += x * lyj;
+    m[2] += x * lzj;
+    m[3] += y * lyj;
+    m[4] += y * lzj;
+    m[5] += z * lzj;
+    moment[0] += x * kept_v;
+    moment[1] += y * kept_v;
+    moment[2] += z * kept_v;
+    inliers += inlier ? one : zero;
+    return r * r;
+  };
+  std::size_t j = 0;
+  for (; j + 2 <= count; j += 2) {
+    const Pair r2 = add(load_pair(lx + j), load_pair(ly + j), load_pair(lz + j),
+                        load_pair(misfit_.data() + j), load_pair(values + j));
+    std::memcpy(squared + j, &r2, sizeof r2);
   }
-  if (inliers < 3) return infinite;
-  const auto symmetric = [](const double* e) {
+  if (j < count) {  // the last light, in the first lane
+    squared[j] = add(Pair{lx[j], 0.0}, Pair{ly[j], 0.0}, Pair{lz[j], 0.0}, Pair{misfit_[j], not_counted},
+                     Pair{values[j], 0.0})[0];
+  }
+  Pair sandwich[6] = {};
+  for (j = 0; j + 2 <= count; j += 2) {
+    const Pair x = load_pair(lx + j), y = load_pair(ly + j), z = load_pair(lz + j),
+               r2 = load_pair(squared + j);
+    sandwich[0] += r2 * (x * x);
+    sandwich[1] += r2 * (x * y);
+    sandwich[2] += r2 * (x * z);
+    sandwich[3] += r2 * (y * y);
+    sandwich[4] += r2 * (y * z);
+    sandwich[5] += r2 * (z * z);
+  }
+  if (j < count) {
+    const double x = lx[j], y = ly[j], z = lz[j], r2 = squared[j];
+    const double outer[6] = {x * x, x * y, x * z, y * y, y * z, z * z};
+    for (int k = 0; k < 6; ++k) sandwich[k][0] += r2 * outer[k];
+  }
+  if (inliers[0] + inliers[1] < 3) return infinite;
+  const auto symmetric = [](const Pair* e) {
     Eigen::Matrix3d out;
-    out << e[0], e[1], e[2], e[1], e[3], e[4], e[2], e[4], e[5];
+    out << lane_sum(e[0]), lane_sum(e[1]), lane_sum(e[2]), lane_sum(e[1]), lane_sum(e[3]), lane_sum(e[4]),
+        lane_sum(e[2]), lane_sum(e[4]), lane_sum(e[5]);
     return out;
   };
   const Eigen::Matrix3d gram = symmetric(m);
@@ -101,7 +137,8 @@ double PixelErrorPredictor::predict(const PixelObservations& data, const Eigen::
   const Eigen::Matrix3d bread = tangent * inverse;
   const double spread =
       deg_from_rad(std::sqrt(std::max(0.0, (bread * meat * bread.transpose()).trace())) / albedo);
-  const Eigen::Vector3d fitted = inverse * Eigen::Vector3d(moment[0], moment[1], moment[2]);
+  const Eigen::Vector3d fitted =
+      inverse * Eigen::Vector3d(lane_sum(moment[0]), lane_sum(moment[1]), lane_sum(moment[2]));
   const double disagreement = fitted.squaredNorm() > 0 ? angle_between_deg(fitted, n) : 180.0;
   return std::hypot(spread, disagreement);
 }

@@ -45,8 +45,8 @@ class PixelErrorPredictor {
 
  private:
   ConfidenceOptions options_;
-  std::vector<double> misfit_;     // images: |v − ρ lᵀn|, the Lambertian residual's size
-  std::vector<std::uint8_t> lit_;  // images: lit and facing the answer
+  std::vector<double> misfit_;  // images: |v − ρ lᵀn|, the Lambertian residual's size; NaN where not lit
+                                // or facing away from the answer
   std::vector<double> magnitude_;  // the lit lights' |residual| first, reordered to find the median
 };
 
