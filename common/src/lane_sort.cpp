@@ -7,7 +7,7 @@
 namespace lightstage {
 namespace {
 
-// Batcher's odd–even merge sort of the next power of two above `length`,
+// Batcher's odd–even merge sort of the power of two at or above `length`,
 // less every exchange that touches a slot at or past `length`: those slots
 // hold +infinity, which no exchange moves down, so such an exchange never
 // swaps.
@@ -35,8 +35,18 @@ std::vector<std::uint16_t> odd_even_merge_network(std::size_t length) {
 using Lanes = float __attribute__((vector_size(LaneSort::kLanes * sizeof(float))));
 
 // One clone per instruction set where the vector is one register on some
-// CPUs and two on others; the loader picks (GCC and Clang on x86-64).
-#if defined(__x86_64__) && defined(__has_attribute)
+// CPUs and two on others; the loader picks (GCC and Clang on x86-64). Not
+// under AddressSanitizer: the loader runs the choice before the sanitizer
+// is set up, and an instrumented choice crashes (google/sanitizers#342).
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define LIGHTSTAGE_LANE_NO_CLONES
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__)
+#define LIGHTSTAGE_LANE_NO_CLONES
+#endif
+#if defined(__x86_64__) && defined(__has_attribute) && !defined(LIGHTSTAGE_LANE_NO_CLONES)
 #if __has_attribute(target_clones)
 #define LIGHTSTAGE_LANE_CLONES __attribute__((target_clones("avx2", "default")))
 #endif
@@ -63,10 +73,9 @@ LIGHTSTAGE_LANE_CLONES void run_network(const std::uint16_t* exchange, const std
 
 }  // namespace
 
-LaneSort::LaneSort(std::size_t max_length) : max_length_(max_length) {
+LaneSort::LaneSort(std::size_t max_length)
+    : max_length_(max_length), networks_((max_length + kStep - 1) / kStep) {
   if (max_length > 65536) fail("LaneSort: lists of {} values, at most 65536", max_length);
-  for (std::size_t length = kStep; length < max_length + kStep; length += kStep)
-    networks_.push_back(odd_even_merge_network(length));
 }
 
 std::size_t LaneSort::slots(std::size_t longest) const {
@@ -74,12 +83,18 @@ std::size_t LaneSort::slots(std::size_t longest) const {
   return (longest + kStep - 1) / kStep * kStep;
 }
 
-void LaneSort::sort(float* values, std::size_t slots) const {
+void LaneSort::sort(float* values, std::size_t slots) {
   if (slots == 0) return;
   if (slots % kStep != 0 || slots / kStep > networks_.size())
     fail("LaneSort: {} slots, not a length from slots()", slots);
-  const std::vector<std::uint16_t>& network = networks_[slots / kStep - 1];
+  // Built the first time a length is sorted: a pixel's lists are mostly far
+  // shorter than the frame count.
+  std::vector<std::uint16_t>& network = networks_[slots / kStep - 1];
+  if (network.empty()) network = odd_even_merge_network(slots);
   run_network(network.data(), network.data() + network.size(), values);
 }
 
 }  // namespace lightstage
+
+#undef LIGHTSTAGE_LANE_CLONES
+#undef LIGHTSTAGE_LANE_NO_CLONES

@@ -113,26 +113,28 @@ class ChromaLanes {
   static constexpr std::size_t kLanes = LaneSort::kLanes;
 
   explicit ChromaLanes(std::size_t frame_count)
-      : frame_count_(frame_count), sort_(frame_count), ratios_(3 * sort_.slots(frame_count) * kLanes) {}
+      : frame_count_(frame_count),
+        sort_(frame_count),
+        stride_(sort_.slots(frame_count) * kLanes),
+        ratios_(3 * stride_) {}
 
   // Pixels [0, count), count ≤ kLanes: rgb at (pixel · frame_count + frame) · 3,
   // saturated at pixel · frame_count + frame; chroma (r, g, b) to out + pixel · 3.
   void compute(const float* rgb, const bool* saturated, std::size_t count, float* out) {
-    const std::size_t stride = sort_.slots(frame_count_) * kLanes;  // one channel's values
     std::array<std::size_t, kLanes> lengths{};
     for (std::size_t lane = 0; lane < count; ++lane)
       lengths[lane] = fill_lane(rgb + lane * frame_count_ * 3, saturated + lane * frame_count_, lane);
     const std::size_t slots = sort_.slots(*std::max_element(lengths.begin(), lengths.end()));
     for (std::size_t lane = 0; lane < kLanes; ++lane)
       for (std::size_t i = lengths[lane]; i < slots; ++i)
-        for (int c = 0; c < 3; ++c) ratios_[c * stride + i * kLanes + lane] = kPadding;
-    for (int c = 0; c < 3; ++c) sort_.sort(ratios_.data() + c * stride, slots);
+        for (int c = 0; c < 3; ++c) ratios_[c * stride_ + i * kLanes + lane] = kPadding;
+    for (int c = 0; c < 3; ++c) sort_.sort(ratios_.data() + c * stride_, slots);
     for (std::size_t lane = 0; lane < count; ++lane) {
       float* chroma = out + lane * 3;
       const std::size_t length = lengths[lane];
       Eigen::RowVector3d median;
       for (int c = 0; c < 3; ++c)
-        median[c] = length == 0 ? 0.0 : std::max(0.0f, ratios_[c * stride + length / 2 * kLanes + lane]);
+        median[c] = length == 0 ? 0.0 : std::max(0.0f, ratios_[c * stride_ + length / 2 * kLanes + lane]);
       const double median_grey = kRed * median[0] + kGreen * median[1] + kBlue * median[2];
       // Never lit, or lit to no colour: neutral.
       for (int c = 0; c < 3; ++c)
@@ -145,7 +147,6 @@ class ChromaLanes {
 
   // One pixel's ratios, channel by channel, into `lane`; returns how many.
   std::size_t fill_lane(const float* rgb, const bool* saturated, std::size_t lane) {
-    const std::size_t stride = sort_.slots(frame_count_) * kLanes;
     const auto grey = [&](std::size_t j) {
       const float* v = rgb + j * 3;
       return kRed * v[0] + kGreen * v[1] + kBlue * v[2];
@@ -159,7 +160,7 @@ class ChromaLanes {
       const double y = grey(j);
       if (saturated[j] || !(y >= kChromaMinShare * brightest)) continue;
       for (int c = 0; c < 3; ++c)
-        ratios_[c * stride + length * kLanes + lane] = static_cast<float>(rgb[j * 3 + c] / y);
+        ratios_[c * stride_ + length * kLanes + lane] = static_cast<float>(rgb[j * 3 + c] / y);
       ++length;
     }
     return length;
@@ -167,6 +168,7 @@ class ChromaLanes {
 
   std::size_t frame_count_;
   LaneSort sort_;
+  std::size_t stride_;         // one channel's values
   std::vector<float> ratios_;  // [channel][slot][lane]
 };
 

@@ -24,6 +24,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -32,29 +33,24 @@ namespace {
 
 constexpr int kThreads = 2;
 
+// The sphere, grey or in colour (a tint per patch: what the chroma costs).
+ImageStack simulated_sphere(const std::string& colour) {
+  sim::SimulateOptions options;
+  options.scene = "sphere";
+  options.material = "cook-torrance:roughness=0.3,ks=0.5";
+  options.colour = colour;
+  options.light_model = sim::LightModel::kDistant;
+  options.width = options.height = 192;
+  return sim::simulate_stack(load_rig(default_rig_path()), options);
+}
+
 const ImageStack& images() {
-  static const ImageStack stack = [] {
-    sim::SimulateOptions options;
-    options.scene = "sphere";
-    options.material = "cook-torrance:roughness=0.3,ks=0.5";
-    options.light_model = sim::LightModel::kDistant;
-    options.width = options.height = 192;
-    return sim::simulate_stack(load_rig(default_rig_path()), options);
-  }();
+  static const ImageStack stack = simulated_sphere("");
   return stack;
 }
 
-// The same sphere in colour (a tint per patch): what the chroma costs.
 const ImageStack& colour_images() {
-  static const ImageStack stack = [] {
-    sim::SimulateOptions options;
-    options.scene = "sphere";
-    options.material = "cook-torrance:roughness=0.3,ks=0.5";
-    options.colour = "patches";
-    options.light_model = sim::LightModel::kDistant;
-    options.width = options.height = 192;
-    return sim::simulate_stack(load_rig(default_rig_path()), options);
-  }();
+  static const ImageStack stack = simulated_sphere("patches");
   return stack;
 }
 

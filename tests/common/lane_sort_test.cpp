@@ -16,7 +16,7 @@ constexpr float kInfinity = std::numeric_limits<float>::infinity();
 // Every length up to 200, each lane its own length, with ties and without:
 // each lane comes out as std::sort orders its list, the padding after it.
 TEST(LaneSort, SortsEveryLaneAsStdSortDoes) {
-  const LaneSort sorter(200);
+  LaneSort sorter(200);
   std::mt19937 rng(11);
   std::uniform_int_distribution<int> few(0, 3);
   std::normal_distribution<float> many;
@@ -50,7 +50,7 @@ TEST(LaneSort, SortsEveryLaneAsStdSortDoes) {
 }
 
 TEST(LaneSort, RefusesListsLongerThanItWasMadeFor) {
-  const LaneSort sorter(96);
+  LaneSort sorter(96);
   EXPECT_EQ(sorter.slots(96), 96u);
   EXPECT_EQ(sorter.slots(90), 96u);
   EXPECT_EQ(sorter.slots(0), 0u);

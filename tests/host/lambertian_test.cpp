@@ -159,6 +159,38 @@ TEST(HostLambertian, RejectsCoplanarLightsOnBothPaths) {
   EXPECT_EQ(cv::countNonZero(selected.solved), 0);
 }
 
+// Lights are summed two at a time: with an odd count, the last one alone
+// makes the normal observable here (the others lie in the x-z plane), in the
+// per-pixel solve and in the confidence it predicts as it goes.
+TEST(HostLambertian, TheLastOfAnOddCountOfLightsIsSummedToo) {
+  auto scene = make_scene(8, 8, 11, 5, false);
+  Observations& obs = scene.observations;
+  for (Eigen::Index j = 0; j + 1 < obs.lights.rows(); ++j) {
+    const double a = 0.3 + 0.2 * static_cast<double>(j);
+    obs.lights.row(j) << std::cos(a), 0.0, std::sin(a);
+  }
+  obs.lights.row(10) << 0.2, 0.5, 0.84;
+  for (std::size_t p = 0; p < scene.normals.size(); ++p) {  // facing every light
+    scene.normals[p] =
+        Vec3(0.05 * static_cast<double>(p % 3), 0.05 * static_cast<double>(p % 5), 1.0).normalized();
+  }
+  for (std::size_t p = 0; p < scene.normals.size(); ++p)
+    for (Eigen::Index j = 0; j < obs.lights.rows(); ++j)
+      obs.intensities(static_cast<Eigen::Index>(p), j) =
+          static_cast<float>(scene.albedo[p] * obs.lights.row(j).dot(scene.normals[p].transpose()));
+  L2Options select;
+  select.shadow_threshold = -1;
+  select.t_low = 0.99;  // all 11 kept, by the per-pixel selection
+  select.confidence = ConfidenceOptions{};
+  const auto result = solve_lambertian(obs, select);
+  std::size_t solved = 0;
+  EXPECT_LT(max_error_deg(scene, result, &solved), 1e-3);
+  EXPECT_EQ(solved, 64u);
+  ASSERT_FALSE(result.predicted_error.empty());
+  for (const cv::Point& at : obs.pixels)
+    EXPECT_TRUE(std::isfinite(result.predicted_error.at<float>(at))) << at;
+}
+
 TEST(HostLambertian, AllDarkPixelIsRejectedNotGuessed) {
   auto scene = make_scene(4, 4, 8, 6, false);
   scene.observations.intensities.row(5).setZero();

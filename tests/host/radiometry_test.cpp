@@ -108,12 +108,16 @@ TEST(HostRadiometry, EveryPixelsChromaIsTheMedianOfItsOwnCountedFrames) {
         if (pixel % 7 == 0 && i % (1 + pixel % 9) != 0) px = cv::Vec3w(0, 0, 0);  // lit by a few frames
         if (pixel % 4 == 1) px[1] = px[2];                                        // ties
         if (pixel == 0) px = cv::Vec3w(0, 0, 0);                                  // never lit
+        if (pixel % 3 == 2 && i % 4 == 0) px[i % 3] = 65535;                      // clipped
       }
     }
     stack.frames.push_back(frame);
   }
-  const Observations obs = make_observations(stack);
+  RadiometryOptions one_thread;  // the pixels in groups of 8 as they come, not split between threads
+  one_thread.threads = 1;
+  const Observations obs = make_observations(stack, one_thread);
   ASSERT_EQ(obs.chroma.rows(), kWidth * kHeight);
+  EXPECT_GT(obs.saturated.count(), 0);
   for (Eigen::Index p = 0; p < obs.chroma.rows(); ++p) {
     const cv::Point at = obs.pixels[static_cast<std::size_t>(p)];
     std::vector<double> grey(kFrames);

@@ -1,10 +1,10 @@
 #include "lightstage/host/solvers/lambertian.hpp"
 
-#include "lightstage/common/double_pair.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/parallel.hpp"
 #include "lightstage/host/solvers/normal_confidence.hpp"
 #include "lightstage/host/solvers/pixel_observations.hpp"
+#include "solvers/normal_equation_pairs.hpp"
 #include "solvers/pixel_driver.hpp"
 
 #include <Eigen/Dense>
@@ -185,36 +185,18 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
       const double* ly = data.lights.col(1).data();
       const double* lz = data.lights.col(2).data();
       const float* values = row.data();
+      NormalEquationPairs sums;
       const DoublePair zero = {};
-      DoublePair g[6] = {}, b[3] = {};
-      const auto add = [&](const DoublePair w, const DoublePair lxj, const DoublePair lyj,
-                           const DoublePair lzj, const DoublePair value) {
-        const auto selected = w != zero;
-        const DoublePair x = selected ? lxj : zero, y = selected ? lyj : zero, z = selected ? lzj : zero;
-        const DoublePair v = selected ? value : zero;
-        g[0] += x * lxj;
-        g[1] += x * lyj;
-        g[2] += x * lzj;
-        g[3] += y * lyj;
-        g[4] += y * lzj;
-        g[5] += z * lzj;
-        b[0] += x * v;
-        b[1] += y * v;
-        b[2] += z * v;
-      };
       Eigen::Index j = 0;
       for (; j + 2 <= images; j += 2)
-        add(load_pair(weight.data() + j), load_pair(lx + j), load_pair(ly + j), load_pair(lz + j),
-            load_pair(values + j));
+        sums.add(load_pair(weight.data() + j) != zero, load_pair(lx + j), load_pair(ly + j),
+                 load_pair(lz + j), load_pair(values + j));
       if (j < images)  // the last light, in the first lane
-        add(DoublePair{weight[static_cast<std::size_t>(j)], 0.0}, DoublePair{lx[j], 0.0},
-            DoublePair{ly[j], 0.0}, DoublePair{lz[j], 0.0}, DoublePair{static_cast<double>(values[j]), 0.0});
-      const double gxx = lane_sum(g[0]), gxy = lane_sum(g[1]), gxz = lane_sum(g[2]), gyy = lane_sum(g[3]),
-                   gyz = lane_sum(g[4]), gzz = lane_sum(g[5]);
-      const double bx = lane_sum(b[0]), by = lane_sum(b[1]), bz = lane_sum(b[2]);
-      Eigen::Matrix3d gram;
-      gram << gxx, gxy, gxz, gxy, gyy, gyz, gxz, gyz, gzz;
-      const Eigen::Vector3d rhs(bx, by, bz);
+        sums.add(DoublePair{weight[static_cast<std::size_t>(j)], 0.0} != zero, DoublePair{lx[j], 0.0},
+                 DoublePair{ly[j], 0.0}, DoublePair{lz[j], 0.0},
+                 DoublePair{static_cast<double>(values[j]), 0.0});
+      const Eigen::Matrix3d gram = sums.gram_matrix();
+      const Eigen::Vector3d rhs = sums.moment_vector();
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
       eigen.computeDirect(gram);
       const Eigen::Vector3d lambda = eigen.eigenvalues();

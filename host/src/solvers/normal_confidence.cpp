@@ -1,11 +1,11 @@
 #include "lightstage/host/solvers/normal_confidence.hpp"
 
-#include "lightstage/common/double_pair.hpp"
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/geometry.hpp"
 #include "lightstage/common/parallel.hpp"
 #include "lightstage/common/select_kth.hpp"
 #include "lightstage/host/solvers/pixel_observations.hpp"
+#include "solvers/normal_equation_pairs.hpp"
 
 #include <Eigen/Dense>
 
@@ -72,24 +72,15 @@ double PixelErrorPredictor::predict(const PixelObservations& data, const Eigen::
   // Σ v l, and then S = Σ r² l lᵀ with r the residual's floored magnitude.
   // An outlier adds exact zeros; its value and residual are not read (either
   // may not be finite). Sums held in registers, so S takes a loop of its own.
-  Pair m[6] = {}, moment[3] = {}, inliers = {};
+  NormalEquationPairs sums;
+  Pair inliers = {};
   double* squared = magnitude_.data();  // r² (0 for an outlier), the median taken
   const Pair cut2 = {cut, cut}, floor2 = {floor, floor}, zero = {}, one = {1.0, 1.0};
   const auto add = [&](const Pair lxj, const Pair lyj, const Pair lzj, const Pair misfit, const Pair v) {
     const auto inlier = misfit <= cut2;
-    const Pair r = inlier ? (misfit < floor2 ? floor2 : misfit) : zero;
-    const Pair x = inlier ? lxj : zero, y = inlier ? lyj : zero, z = inlier ? lzj : zero;
-    const Pair kept_v = inlier ? v : zero;
-    m[0] += x * lxj;
-    m[1] += x * lyj;
-    m[2] += x * lzj;
-    m[3] += y * lyj;
-    m[4] += y * lzj;
-    m[5] += z * lzj;
-    moment[0] += x * kept_v;
-    moment[1] += y * kept_v;
-    moment[2] += z * kept_v;
+    sums.add(inlier, lxj, lyj, lzj, v);
     inliers += inlier ? one : zero;
+    const Pair r = inlier ? (misfit < floor2 ? floor2 : misfit) : zero;
     return r * r;
   };
   std::size_t j = 0;
@@ -119,14 +110,8 @@ double PixelErrorPredictor::predict(const PixelObservations& data, const Eigen::
     for (int k = 0; k < 6; ++k) sandwich[k][0] += r2 * outer[k];
   }
   if (inliers[0] + inliers[1] < 3) return infinite;
-  const auto symmetric = [](const Pair* e) {
-    Eigen::Matrix3d out;
-    out << lane_sum(e[0]), lane_sum(e[1]), lane_sum(e[2]), lane_sum(e[1]), lane_sum(e[3]), lane_sum(e[4]),
-        lane_sum(e[2]), lane_sum(e[4]), lane_sum(e[5]);
-    return out;
-  };
-  const Eigen::Matrix3d gram = symmetric(m);
-  const Eigen::Matrix3d meat = symmetric(sandwich);
+  const Eigen::Matrix3d gram = sums.gram_matrix();
+  const Eigen::Matrix3d meat = symmetric_from_pairs(sandwich);
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
   eigen.computeDirect(gram);
   const Eigen::Vector3d lambda = eigen.eigenvalues();
@@ -137,8 +122,7 @@ double PixelErrorPredictor::predict(const PixelObservations& data, const Eigen::
   const Eigen::Matrix3d bread = tangent * inverse;
   const double spread =
       deg_from_rad(std::sqrt(std::max(0.0, (bread * meat * bread.transpose()).trace())) / albedo);
-  const Eigen::Vector3d fitted =
-      inverse * Eigen::Vector3d(lane_sum(moment[0]), lane_sum(moment[1]), lane_sum(moment[2]));
+  const Eigen::Vector3d fitted = inverse * sums.moment_vector();
   const double disagreement = fitted.squaredNorm() > 0 ? angle_between_deg(fitted, n) : 180.0;
   return std::hypot(spread, disagreement);
 }

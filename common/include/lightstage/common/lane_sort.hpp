@@ -29,13 +29,14 @@ class LaneSort {
   // Sorts each lane of values[0, slots × kLanes) ascending, where
   // values[i × kLanes + lane] is the lane's i-th value and `slots` came from
   // slots(). A shorter list pads its lane with +infinity, which stays behind
-  // its values. NaN-free.
-  void sort(float* values, std::size_t slots) const;
+  // its values. NaN-free. Not thread-safe (it builds networks as it needs
+  // them): one per thread.
+  void sort(float* values, std::size_t slots);
 
  private:
   static constexpr std::size_t kStep = 8;  // networks for lengths 8, 16, 24, …
   std::size_t max_length_;
-  // [length / kStep − 1]: the exchanges' slot pairs, flat.
+  // [length / kStep − 1]: the exchanges' slot pairs, flat; empty until used.
   std::vector<std::vector<std::uint16_t>> networks_;
 };
 

@@ -27,7 +27,6 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
-#include <cstdint>
 #include <vector>
 
 namespace lightstage {
@@ -47,7 +46,8 @@ class PixelErrorPredictor {
   ConfidenceOptions options_;
   std::vector<double> misfit_;  // images: |v − ρ lᵀn|, the Lambertian residual's size; NaN where not lit
                                 // or facing away from the answer
-  std::vector<double> magnitude_;  // the lit lights' |residual| first, reordered to find the median
+  std::vector<double> magnitude_;  // images: the lit lights' |residual| first, reordered to find the
+                                   // median; then every light's floored r² (0 for an outlier)
 };
 
 // The unit normal the confidence judges for a solved pixel: the stored one,
