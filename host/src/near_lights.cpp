@@ -26,14 +26,21 @@ void directions_and_distances(const NearLights& near, std::size_t pixel, Eigen::
   directions.col(2).array() *= dz;
 }
 
-}  // namespace
-
-Eigen::VectorXd near_light_reference(const NearLights& near) {
+// |p_j − c|² for every LED into `out`, in storage it already has when sized.
+void reference_distances(const NearLights& near, Eigen::VectorXd& out) {
   const Eigen::MatrixX3d& leds = near.led_positions_mm;
   const Eigen::Vector3d& c = near.object_centre_mm;
   const auto cx = leds.col(0).array() - c.x(), cy = leds.col(1).array() - c.y(),
              cz = leds.col(2).array() - c.z();
-  return cx * cx + cy * cy + cz * cz;
+  out = cx * cx + cy * cy + cz * cz;
+}
+
+}  // namespace
+
+Eigen::VectorXd near_light_reference(const NearLights& near) {
+  Eigen::VectorXd reference;
+  reference_distances(near, reference);
+  return reference;
 }
 
 void near_light_directions(const NearLights& near, const Eigen::VectorXd& reference, std::size_t pixel,
@@ -44,7 +51,10 @@ void near_light_directions(const NearLights& near, const Eigen::VectorXd& refere
 
 void near_light_directions(const NearLights& near, std::size_t pixel, Eigen::MatrixX3d& directions,
                            Eigen::VectorXd& gains) {
-  near_light_directions(near, near_light_reference(near), pixel, directions, gains);
+  // Kept from call to call: a caller pixel by pixel allocates nothing.
+  thread_local Eigen::VectorXd reference;
+  reference_distances(near, reference);
+  near_light_directions(near, reference, pixel, directions, gains);
 }
 
 Eigen::MatrixX3d points_on_plane(const std::vector<cv::Point>& pixels, const PixelRay& ray, double plane_z_mm,

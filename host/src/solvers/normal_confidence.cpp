@@ -24,8 +24,6 @@ namespace {
 // eigenvalue) leave the normal undetermined.
 constexpr double kMinEigenvalueRatio = 1e-6;
 
-using Pair = DoublePair;
-
 }  // namespace
 
 double PixelErrorPredictor::predict(const PixelObservations& data, const Eigen::Vector3d& n, double albedo) {
@@ -73,30 +71,31 @@ double PixelErrorPredictor::predict(const PixelObservations& data, const Eigen::
   // An outlier adds exact zeros; its value and residual are not read (either
   // may not be finite). Sums held in registers, so S takes a loop of its own.
   NormalEquationPairs sums;
-  Pair inliers = {};
+  DoublePair inliers = {};
   double* squared = magnitude_.data();  // r² (0 for an outlier), the median taken
-  const Pair cut2 = {cut, cut}, floor2 = {floor, floor}, zero = {}, one = {1.0, 1.0};
-  const auto add = [&](const Pair lxj, const Pair lyj, const Pair lzj, const Pair misfit, const Pair v) {
+  const DoublePair cut2 = {cut, cut}, floor2 = {floor, floor}, zero = {}, one = {1.0, 1.0};
+  const auto add = [&](const DoublePair lxj, const DoublePair lyj, const DoublePair lzj,
+                       const DoublePair misfit, const DoublePair v) {
     const auto inlier = misfit <= cut2;
     sums.add(inlier, lxj, lyj, lzj, v);
     inliers += inlier ? one : zero;
-    const Pair r = inlier ? (misfit < floor2 ? floor2 : misfit) : zero;
+    const DoublePair r = inlier ? (misfit < floor2 ? floor2 : misfit) : zero;
     return r * r;
   };
   std::size_t j = 0;
   for (; j + 2 <= count; j += 2) {
-    const Pair r2 = add(load_pair(lx + j), load_pair(ly + j), load_pair(lz + j),
-                        load_pair(misfit_.data() + j), load_pair(values + j));
+    const DoublePair r2 = add(load_pair(lx + j), load_pair(ly + j), load_pair(lz + j),
+                              load_pair(misfit_.data() + j), load_pair(values + j));
     std::memcpy(squared + j, &r2, sizeof r2);
   }
   if (j < count) {  // the last light, in the first lane
-    squared[j] = add(Pair{lx[j], 0.0}, Pair{ly[j], 0.0}, Pair{lz[j], 0.0}, Pair{misfit_[j], not_counted},
-                     Pair{values[j], 0.0})[0];
+    squared[j] = add(DoublePair{lx[j], 0.0}, DoublePair{ly[j], 0.0}, DoublePair{lz[j], 0.0},
+                     DoublePair{misfit_[j], not_counted}, DoublePair{values[j], 0.0})[0];
   }
-  Pair sandwich[6] = {};
+  DoublePair sandwich[6] = {};
   for (j = 0; j + 2 <= count; j += 2) {
-    const Pair x = load_pair(lx + j), y = load_pair(ly + j), z = load_pair(lz + j),
-               r2 = load_pair(squared + j);
+    const DoublePair x = load_pair(lx + j), y = load_pair(ly + j), z = load_pair(lz + j),
+                     r2 = load_pair(squared + j);
     sandwich[0] += r2 * (x * x);
     sandwich[1] += r2 * (x * y);
     sandwich[2] += r2 * (x * z);
