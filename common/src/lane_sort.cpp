@@ -1,6 +1,7 @@
 #include "lightstage/common/lane_sort.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/simd_clones.hpp"
 
 #include <cstring>
 
@@ -34,28 +35,7 @@ std::vector<std::uint16_t> odd_even_merge_network(std::size_t length) {
 
 using Lanes = float __attribute__((vector_size(LaneSort::kLanes * sizeof(float))));
 
-// One clone per instruction set where the vector is one register on some
-// CPUs and two on others; the loader picks (GCC and Clang on x86-64). Not
-// under AddressSanitizer: the loader runs the choice before the sanitizer
-// is set up, and an instrumented choice crashes (google/sanitizers#342).
-#if defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define LIGHTSTAGE_LANE_NO_CLONES
-#endif
-#endif
-#if defined(__SANITIZE_ADDRESS__)
-#define LIGHTSTAGE_LANE_NO_CLONES
-#endif
-#if defined(__x86_64__) && defined(__has_attribute) && !defined(LIGHTSTAGE_LANE_NO_CLONES)
-#if __has_attribute(target_clones)
-#define LIGHTSTAGE_LANE_CLONES __attribute__((target_clones("avx2", "default")))
-#endif
-#endif
-#ifndef LIGHTSTAGE_LANE_CLONES
-#define LIGHTSTAGE_LANE_CLONES
-#endif
-
-LIGHTSTAGE_LANE_CLONES void run_network(const std::uint16_t* exchange, const std::uint16_t* end,
+LIGHTSTAGE_SIMD_CLONES void run_network(const std::uint16_t* exchange, const std::uint16_t* end,
                                         float* values) {
   constexpr std::size_t kLanes = LaneSort::kLanes;
   for (; exchange != end; exchange += 2) {
@@ -95,6 +75,3 @@ void LaneSort::sort(float* values, std::size_t slots) {
 }
 
 }  // namespace lightstage
-
-#undef LIGHTSTAGE_LANE_CLONES
-#undef LIGHTSTAGE_LANE_NO_CLONES

@@ -2,10 +2,12 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/parallel.hpp"
+#include "lightstage/common/simd_clones.hpp"
 #include "lightstage/host/solvers/normal_confidence.hpp"
 #include "lightstage/host/solvers/pixel_observations.hpp"
-#include "solvers/normal_equation_pairs.hpp"
+#include "solvers/confidence_lanes.hpp"
 #include "solvers/pixel_driver.hpp"
+#include "solvers/pixel_lanes.hpp"
 
 #include <Eigen/Dense>
 
@@ -106,125 +108,178 @@ Counters solve_all(const Observations& obs, const L2Options& options, Maps& maps
   return total;
 }
 
-// The confidence's predicted error at the answer just stored for pixel `p`,
-// at the normal predict_normal_error would judge after the solve's clamp
-// (on the horizon where it faced away, clamp_facing_away). `data` holds the
-// pixel's lights (and near gains) already.
-float predicted_error(const Observations& obs, std::size_t p, const Maps& maps, PixelObservations& data,
-                      PixelErrorPredictor& predictor) {
-  const cv::Point at = obs.pixels[p];
-  cv::Vec3f stored = maps.normals.at<cv::Vec3f>(at);
-  if (stored[2] < 0) stored = on_horizon(stored);
-  Eigen::Vector3d n;
-  if (!judged_normal(stored, n)) return 0.f;
-  load_pixel_values(obs, p, /*drop_saturated=*/true, data);
-  return static_cast<float>(predictor.predict(data, n, maps.albedo.at<float>(at)));
+// Each light's weight (1 kept, 0 not: finite and above the threshold) and
+// value at unit light (the observed float divided by the near light's gain
+// as a float); per lane the kept lights.
+LIGHTSTAGE_SIMD_CLONES void kept_values(const LightLanes& lanes, double shadow_threshold, PixelLanes* weight,
+                                        PixelLanes* corrected, PixelLanes& kept) {
+  using FloatLanes = float __attribute__((vector_size(kPixelLanes * sizeof(float))));
+  const PixelLanes zero = {}, one = PixelLanes{} + 1.0;
+  const bool threshold = shadow_threshold >= 0;
+  PixelLanes count = {};
+  for (std::size_t j = 0; j < lanes.images(); ++j) {
+    const PixelLanes value = lanes.observed[j];
+    PixelMask keep = value - value == zero;  // finite
+    if (threshold) keep &= value > shadow_threshold;
+    weight[j] = keep ? one : zero;
+    count += weight[j];
+    corrected[j] = lanes.near_lights()
+                       ? __builtin_convertvector(__builtin_convertvector(value, FloatLanes) /
+                                                     __builtin_convertvector(lanes.gain[j], FloatLanes),
+                                                 PixelLanes)
+                       : value;
+  }
+  kept = count;
 }
 
-// Per-pixel selection: shadows dropped, the lowest t_low kept, 3×3 normal equations.
-// With near lights each pixel has its own light directions, and its values
-// are divided by the falloff gains before the fit (the shadow threshold
-// still applies to the observed values).
+// The normal equations over the lights of weight 1.
+LIGHTSTAGE_SIMD_CLONES void normal_equations(const LightLanes& lanes, const PixelLanes* weight,
+                                             const PixelLanes* values, NormalEquationLanes& sums) {
+  NormalEquationLanes local;  // in registers: the arrays could alias the caller's
+  const PixelLanes zero = {};
+  const std::size_t images = lanes.images();
+  std::size_t j = 0;
+  for (; j + 2 <= images; j += 2) {
+    local.add(0, weight[j] != zero, lanes.x[j], lanes.y[j], lanes.z[j], values[j]);
+    local.add(1, weight[j + 1] != zero, lanes.x[j + 1], lanes.y[j + 1], lanes.z[j + 1], values[j + 1]);
+  }
+  if (j < images) local.add(0, weight[j] != zero, lanes.x[j], lanes.y[j], lanes.z[j], values[j]);
+  sums = local;
+}
+
+// Σ (lᵀs − v)² over the lights of weight 1: the even and the odd lights'
+// sums added, then the last of an odd count.
+LIGHTSTAGE_SIMD_CLONES void squared_residual(const LightLanes& lanes, const PixelLanes* weight,
+                                             const PixelLanes* values, const PixelLanes& sx,
+                                             const PixelLanes& sy, const PixelLanes& sz,
+                                             PixelLanes& squared) {
+  const PixelLanes zero = {};
+  PixelLanes r;
+  const auto residual = [&](std::size_t j) __attribute__((always_inline)) {
+    const PixelLanes fitted = lanes.x[j] * sx + lanes.y[j] * sy + lanes.z[j] * sz;
+    r = weight[j] != zero ? fitted - values[j] : zero;
+  };
+  PixelLanes even = {}, odd = {};
+  const std::size_t images = lanes.images();
+  std::size_t j = 0;
+  for (; j + 2 <= images; j += 2) {
+    residual(j);
+    even += r * r;
+    residual(j + 1);
+    odd += r * r;
+  }
+  squared = even + odd;
+  if (j < images) {
+    residual(j);
+    squared += r * r;
+  }
+}
+
+// Keeps only the darkest ceil(t_low · kept) of lane `lane`'s kept lights
+// (ties in light order); returns how many.
+std::size_t keep_darkest(std::size_t lane, double t_low, std::size_t images, const PixelLanes* corrected,
+                         PixelLanes* weight, std::vector<std::size_t>& kept) {
+  kept.clear();
+  for (std::size_t j = 0; j < images; ++j)
+    if (weight[j][lane] != 0) kept.push_back(j);
+  const auto keep = static_cast<std::size_t>(std::ceil(t_low * static_cast<double>(kept.size()) - 1e-9));
+  std::stable_sort(kept.begin(), kept.end(),
+                   [&](std::size_t a, std::size_t b) { return corrected[a][lane] < corrected[b][lane]; });
+  for (std::size_t k = std::min(keep, kept.size()); k < kept.size(); ++k) weight[kept[k]][lane] = 0.0;
+  return std::min(keep, kept.size());
+}
+
+// Per-pixel selection: shadows dropped, the lowest t_low kept, 3×3 normal
+// equations, kPixelLanes pixels at a time (pixel_lanes.hpp). With near
+// lights each pixel has its own light directions, and its values are divided
+// by the falloff gains before the fit (the shadow threshold still applies to
+// the observed values).
 // With L2Options::confidence each solved pixel's error is predicted while its
-// lights are at hand (a near light's direction is the costliest part of both).
+// lights are at hand (a near light's direction is the costliest part of both),
+// at the normal predict_normal_error would judge after the solve's clamp (on
+// the horizon where it faced away, clamp_facing_away).
 Counters solve_selected(const Observations& obs, const L2Options& options, Maps& maps) {
-  const Eigen::Index images = static_cast<Eigen::Index>(obs.image_count());
+  const auto images = static_cast<std::size_t>(obs.image_count());
   const std::size_t pixels = obs.pixel_count();
-  const Eigen::VectorXd centre_squared = obs.near ? near_light_reference(*obs.near) : Eigen::VectorXd();
+  const Eigen::VectorXd reference = obs.near ? near_light_reference(*obs.near) : Eigen::VectorXd();
   // Resolved once: the chunks must be no more than the counters made for them.
   const int threads = resolve_threads(options.threads);
   std::vector<Counters> per_chunk(static_cast<std::size_t>(threads));
   parallel_chunks(pixels, threads, [&](std::size_t chunk, std::size_t begin, std::size_t end) {
     Counters& counters = per_chunk[chunk];
-    std::vector<Eigen::Index> kept;
-    kept.reserve(static_cast<std::size_t>(images));
-    PixelObservations data;  // the pixel's lights, and for the confidence its values
-    if (!obs.near) data.lights = obs.lights;
-    std::optional<PixelErrorPredictor> predictor;
+    LightLanes lanes;
+    std::optional<ConfidenceLanes> predictor;
     if (options.confidence) predictor.emplace(*options.confidence);
-    Eigen::VectorXf corrected(images);
-    std::vector<double> weight(static_cast<std::size_t>(images));  // 1 for a kept light, else 0
+    LaneBuffer weight, corrected;
+    weight.resize(images);
+    corrected.resize(images);
+    std::vector<std::size_t> kept;
+    kept.reserve(images);
     detail::ProgressBatch batch(options.progress);
-    for (std::size_t p = begin; p < end; ++p) {
-      batch.tick();
-      const auto observed = obs.intensities.row(static_cast<Eigen::Index>(p));
-      corrected = observed.transpose();
-      if (obs.near) {
-        near_light_directions(*obs.near, centre_squared, p, data.lights, data.near_gains);
-        corrected.array() /= data.near_gains.cast<float>().array();
+    for (std::size_t first = begin; first < end; first += kPixelLanes) {
+      const std::size_t count = std::min(kPixelLanes, end - first);
+      std::size_t group[kPixelLanes];
+      for (std::size_t lane = 0; lane < count; ++lane) {
+        group[lane] = first + lane;
+        batch.tick();
       }
-      const auto& row = corrected;
-      std::size_t count = 0;
-      for (Eigen::Index j = 0; j < images; ++j) {
-        const float value = observed(j);
-        const bool keep = std::isfinite(value) && !(options.shadow_threshold >= 0 &&
-                                                    static_cast<double>(value) <= options.shadow_threshold);
-        weight[static_cast<std::size_t>(j)] = keep ? 1.0 : 0.0;
-        count += keep ? 1 : 0;
+      load_light_lanes(obs, reference, group, count, lanes);
+      PixelLanes kept_count;
+      kept_values(lanes, options.shadow_threshold, weight.data(), corrected.data(), kept_count);
+      std::size_t used[kPixelLanes];
+      for (std::size_t lane = 0; lane < count; ++lane)
+        used[lane] = options.t_low < 1.0
+                         ? keep_darkest(lane, options.t_low, images, corrected.data(), weight.data(), kept)
+                         : static_cast<std::size_t>(kept_count[lane]);
+      NormalEquationLanes sums;
+      normal_equations(lanes, weight.data(), corrected.data(), sums);
+      Eigen::Vector3d s[kPixelLanes];
+      bool solvable[kPixelLanes] = {};
+      PixelLanes sx = {}, sy = {}, sz = {};
+      for (std::size_t lane = 0; lane < count; ++lane) {
+        if (static_cast<int>(used[lane]) < options.min_observations) {
+          ++counters.too_few;
+          continue;
+        }
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+        eigen.computeDirect(sums.gram_matrix(lane));
+        const Eigen::Vector3d lambda = eigen.eigenvalues();
+        if (!(lambda(0) > kMinEigenvalueRatio * lambda(2))) {
+          ++counters.degenerate;
+          continue;
+        }
+        const Eigen::Matrix3d& v = eigen.eigenvectors();
+        s[lane] = v * (v.transpose() * sums.moment_vector(lane)).cwiseQuotient(lambda);
+        sx[lane] = s[lane].x();
+        sy[lane] = s[lane].y();
+        sz[lane] = s[lane].z();
+        solvable[lane] = true;
       }
-      if (options.t_low < 1.0) {
-        kept.clear();
-        for (Eigen::Index j = 0; j < images; ++j)
-          if (weight[static_cast<std::size_t>(j)] != 0) kept.push_back(j);
-        const auto keep =
-            static_cast<std::size_t>(std::ceil(options.t_low * static_cast<double>(kept.size()) - 1e-9));
-        std::stable_sort(kept.begin(), kept.end(),
-                         [&](Eigen::Index a, Eigen::Index b) { return row(a) < row(b); });
-        for (std::size_t k = std::min(keep, kept.size()); k < kept.size(); ++k)
-          weight[static_cast<std::size_t>(kept[k])] = 0.0;
-        count = std::min(keep, kept.size());
-      }
-      if (static_cast<int>(count) < options.min_observations) {
-        ++counters.too_few;
-        continue;
-      }
-      // The normal equations, two lights at a time (a vector's lanes) over the
-      // lights' columns; a light left out adds exact zeros (its value, maybe
-      // not finite, is not read).
-      const double* lx = data.lights.col(0).data();
-      const double* ly = data.lights.col(1).data();
-      const double* lz = data.lights.col(2).data();
-      const float* values = row.data();
-      NormalEquationPairs sums;
-      const DoublePair zero = {};
-      Eigen::Index j = 0;
-      for (; j + 2 <= images; j += 2)
-        sums.add(load_pair(weight.data() + j) != zero, load_pair(lx + j), load_pair(ly + j),
-                 load_pair(lz + j), load_pair(values + j));
-      if (j < images)  // the last light, in the first lane
-        sums.add(DoublePair{weight[static_cast<std::size_t>(j)], 0.0} != zero, DoublePair{lx[j], 0.0},
-                 DoublePair{ly[j], 0.0}, DoublePair{lz[j], 0.0},
-                 DoublePair{static_cast<double>(values[j]), 0.0});
-      const Eigen::Matrix3d gram = sums.gram_matrix();
-      const Eigen::Vector3d rhs = sums.moment_vector();
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
-      eigen.computeDirect(gram);
-      const Eigen::Vector3d lambda = eigen.eigenvalues();
-      if (!(lambda(0) > kMinEigenvalueRatio * lambda(2))) {
-        ++counters.degenerate;
-        continue;
-      }
-      const Eigen::Matrix3d& v = eigen.eigenvectors();
-      const Eigen::Vector3d s = v * (v.transpose() * rhs).cwiseQuotient(lambda);
-      const DoublePair sx = {s.x(), s.x()}, sy = {s.y(), s.y()}, sz = {s.z(), s.z()};
-      DoublePair squares = {};
-      for (j = 0; j + 2 <= images; j += 2) {
-        const DoublePair fitted = load_pair(lx + j) * sx + load_pair(ly + j) * sy + load_pair(lz + j) * sz;
-        const DoublePair r = load_pair(weight.data() + j) != zero ? fitted - load_pair(values + j) : zero;
-        squares += r * r;
-      }
-      double squared = lane_sum(squares);
-      if (j < images && weight[static_cast<std::size_t>(j)] != 0) {
-        const double r = lx[j] * s.x() + ly[j] * s.y() + lz[j] * s.z() - static_cast<double>(values[j]);
-        squared += r * r;
-      }
-      if (store(s, std::sqrt(squared / static_cast<double>(count)), obs.pixels[p], maps)) {
+      PixelLanes squared;
+      squared_residual(lanes, weight.data(), corrected.data(), sx, sy, sz, squared);
+      bool judged[kPixelLanes] = {};
+      Eigen::Vector3d normals[kPixelLanes];
+      double albedo[kPixelLanes], errors[kPixelLanes];
+      for (std::size_t lane = 0; lane < count; ++lane) {
+        if (!solvable[lane]) continue;
+        const cv::Point at = obs.pixels[group[lane]];
+        if (!store(s[lane], std::sqrt(squared[lane] / static_cast<double>(used[lane])), at, maps)) {
+          ++counters.degenerate;
+          continue;
+        }
         ++counters.solved;
-        if (predictor)
-          maps.predicted_error.at<float>(obs.pixels[p]) = predicted_error(obs, p, maps, data, *predictor);
-      } else {
-        ++counters.degenerate;
+        if (!predictor) continue;
+        cv::Vec3f stored = maps.normals.at<cv::Vec3f>(at);
+        if (stored[2] < 0) stored = on_horizon(stored);
+        // A stored normal not judged keeps the map's 0, as the separate pass leaves it.
+        judged[lane] = judged_normal(stored, normals[lane]);
+        albedo[lane] = maps.albedo.at<float>(at);
       }
+      if (!predictor) continue;
+      predictor->predict(lanes, normals, albedo, judged, errors);
+      for (std::size_t lane = 0; lane < count; ++lane)
+        if (judged[lane])
+          maps.predicted_error.at<float>(obs.pixels[group[lane]]) = static_cast<float>(errors[lane]);
     }
   });
   Counters total;

@@ -4,8 +4,10 @@
 #include "lightstage/common/geometry.hpp"
 #include "lightstage/common/parallel.hpp"
 #include "lightstage/common/select_kth.hpp"
+#include "lightstage/common/simd_clones.hpp"
+#include "lightstage/host/near_lights.hpp"
 #include "lightstage/host/solvers/pixel_observations.hpp"
-#include "solvers/normal_equation_pairs.hpp"
+#include "solvers/confidence_lanes.hpp"
 
 #include <Eigen/Dense>
 
@@ -24,93 +26,100 @@ namespace {
 // eigenvalue) leave the normal undetermined.
 constexpr double kMinEigenvalueRatio = 1e-6;
 
-}  // namespace
-
-double PixelErrorPredictor::predict(const PixelObservations& data, const Eigen::Vector3d& n, double albedo) {
-  const ConfidenceOptions& options = options_;
-  const double infinite = std::numeric_limits<double>::infinity();
-  if (!(albedo > 0 && std::isfinite(albedo))) return infinite;
-  const Eigen::Index images = data.count();
-  const auto count = static_cast<std::size_t>(images);
-  if (misfit_.size() < count) {
-    misfit_.resize(count);
-    magnitude_.resize(count);
-  }
-  const double* lx = data.lights.col(0).data();
-  const double* ly = data.lights.col(1).data();
-  const double* lz = data.lights.col(2).data();
-  const double* values = data.values.data();
-  const double not_counted = std::numeric_limits<double>::quiet_NaN();
-  // Written whatever the test says, kept by advancing: no branch to mispredict.
-  std::size_t lit = 0;
-  double lit_sum = 0;
-  for (std::size_t j = 0; j < count; ++j) {
-    const double value = values[j];
-    const double shading = lx[j] * n.x() + ly[j] * n.y() + lz[j] * n.z();
-    const double misfit = std::abs(value - albedo * shading);
-    // Lit, and not from behind the answer (the model has no slope there).
+// The first pass: each light's value at unit light and misfit, NaN where
+// the light is not counted (not lit, or from behind the answer: the model
+// has no slope there); each lane's counted misfits in light order into
+// magnitude[lane]; per lane the counted lights and their values' sum.
+LIGHTSTAGE_SIMD_CLONES void misfits(const LightLanes& lanes, const PixelLanes& nx, const PixelLanes& ny,
+                                    const PixelLanes& nz, const PixelLanes& albedo, double shadow_threshold,
+                                    PixelLanes* values, PixelLanes* misfit, double* const* magnitude,
+                                    std::size_t* lit, PixelLanes& lit_sum) {
+  const PixelLanes not_counted = PixelLanes{} + std::numeric_limits<double>::quiet_NaN(), zero = {};
+  const PixelMask magnitude_bits = ~__builtin_bit_cast(PixelMask, -PixelLanes{});  // all but the sign (of −0)
+  const PixelLanes* gain = lanes.near_lights() ? lanes.gain.data() : nullptr;
+  const std::size_t images = lanes.images();
+  PixelLanes sum = {};
+  for (std::size_t j = 0; j < images; ++j) {
+    const PixelLanes value = gain != nullptr ? lanes.observed[j] / gain[j] : lanes.observed[j];
+    values[j] = value;
+    const PixelLanes shading = lanes.x[j] * nx + lanes.y[j] * ny + lanes.z[j] * nz;
+    const PixelLanes m = __builtin_bit_cast(
+        PixelLanes, __builtin_bit_cast(PixelMask, value - albedo * shading) & magnitude_bits);
     // Bitwise, not short-circuit: all three are cheap, and a branch on each would mispredict.
-    const bool counted = (data.usable[j] != 0) & (value > options.shadow_threshold) & (shading > 0);
+    const PixelMask counted = (value - value == zero) & (lanes.unsaturated[j] != zero) &
+                              (value > shadow_threshold) & (shading > zero);
     // NaN compares false against any cut, an infinite one too.
-    misfit_[j] = counted ? misfit : not_counted;
-    magnitude_[lit] = misfit;
-    lit += counted ? 1 : 0;
-    lit_sum += counted ? value : 0.0;
+    misfit[j] = counted ? m : not_counted;
+    sum += counted ? value : zero;
+    // Written whatever the test says, kept by advancing: no branch to mispredict.
+    for (std::size_t lane = 0; lane < kPixelLanes; ++lane) {
+      magnitude[lane][lit[lane]] = m[lane];
+      lit[lane] += static_cast<std::size_t>(counted[lane] & 1);
+    }
   }
-  if (lit < 3) return infinite;
-  const double floor = options.min_relative_sigma * lit_sum / static_cast<double>(lit);
-  // Three lit lights leave no spare one to judge them by: all are inliers (the
-  // cut at twice their median would drop one whenever rounding decides).
-  const auto half = static_cast<std::ptrdiff_t>(lit / 2);
-  const double cut = lit == 3
-                         ? infinite
-                         : std::max(floor, options.trim * select_kth(magnitude_.data(),
-                                                                     static_cast<std::ptrdiff_t>(lit), half));
-  // The inliers' sums, two lights at a time (a vector's lanes): M = Σ l lᵀ,
-  // Σ v l, and then S = Σ r² l lᵀ with r the residual's floored magnitude.
-  // An outlier adds exact zeros; its value and residual are not read (either
-  // may not be finite). Sums held in registers, so S takes a loop of its own.
-  NormalEquationPairs sums;
-  DoublePair inliers = {};
-  double* squared = magnitude_.data();  // r² (0 for an outlier), the median taken
-  const DoublePair cut2 = {cut, cut}, floor2 = {floor, floor}, zero = {}, one = {1.0, 1.0};
-  const auto add = [&](const DoublePair lxj, const DoublePair lyj, const DoublePair lzj,
-                       const DoublePair misfit, const DoublePair v) {
-    const auto inlier = misfit <= cut2;
-    sums.add(inlier, lxj, lyj, lzj, v);
-    inliers += inlier ? one : zero;
-    const DoublePair r = inlier ? (misfit < floor2 ? floor2 : misfit) : zero;
-    return r * r;
+  lit_sum = sum;
+}
+
+// Σ l lᵀ and Σ v l over the inliers (misfit within the cut), their count,
+// and each light's floored r² (0 for an outlier) into `squared`. An outlier
+// adds exact zeros; its value and misfit are not read.
+LIGHTSTAGE_SIMD_CLONES void inlier_sums(const LightLanes& lanes, const PixelLanes* values,
+                                        const PixelLanes* misfit, const PixelLanes& cut,
+                                        const PixelLanes& floor, NormalEquationLanes& sums,
+                                        PixelLanes (&inliers)[2], PixelLanes* squared) {
+  // Local sums (kept in registers: `squared` could alias the caller's).
+  NormalEquationLanes local;
+  PixelLanes count[2] = {};
+  const PixelLanes zero = {}, one = PixelLanes{} + 1.0;
+  const auto add = [&](int set, std::size_t j) __attribute__((always_inline)) {
+    const PixelMask inlier = misfit[j] <= cut;
+    local.add(set, inlier, lanes.x[j], lanes.y[j], lanes.z[j], values[j]);
+    count[set] += inlier ? one : zero;
+    const PixelLanes r = inlier ? (misfit[j] < floor ? floor : misfit[j]) : zero;
+    squared[j] = r * r;
   };
+  const std::size_t images = lanes.images();
   std::size_t j = 0;
-  for (; j + 2 <= count; j += 2) {
-    const DoublePair r2 = add(load_pair(lx + j), load_pair(ly + j), load_pair(lz + j),
-                              load_pair(misfit_.data() + j), load_pair(values + j));
-    std::memcpy(squared + j, &r2, sizeof r2);
+  for (; j + 2 <= images; j += 2) {
+    add(0, j);
+    add(1, j + 1);
   }
-  if (j < count) {  // the last light, in the first lane
-    squared[j] = add(DoublePair{lx[j], 0.0}, DoublePair{ly[j], 0.0}, DoublePair{lz[j], 0.0},
-                     DoublePair{misfit_[j], not_counted}, DoublePair{values[j], 0.0})[0];
+  if (j < images) add(0, j);  // the last of an odd count, with the even lights
+  sums = local;
+  inliers[0] = count[0];
+  inliers[1] = count[1];
+}
+
+// S = Σ r² l lᵀ, upper triangle, in two sets (even and odd lights).
+LIGHTSTAGE_SIMD_CLONES void sandwich_sums(const LightLanes& lanes, const PixelLanes* squared,
+                                          PixelLanes (&sandwich)[2][6]) {
+  PixelLanes local[2][6] = {};
+  const auto add = [&](int set, std::size_t j) __attribute__((always_inline)) {
+    PixelLanes* s = local[set];
+    const PixelLanes x = lanes.x[j], y = lanes.y[j], z = lanes.z[j], r2 = squared[j];
+    s[0] += r2 * (x * x);
+    s[1] += r2 * (x * y);
+    s[2] += r2 * (x * z);
+    s[3] += r2 * (y * y);
+    s[4] += r2 * (y * z);
+    s[5] += r2 * (z * z);
+  };
+  const std::size_t images = lanes.images();
+  std::size_t j = 0;
+  for (; j + 2 <= images; j += 2) {
+    add(0, j);
+    add(1, j + 1);
   }
-  DoublePair sandwich[6] = {};
-  for (j = 0; j + 2 <= count; j += 2) {
-    const DoublePair x = load_pair(lx + j), y = load_pair(ly + j), z = load_pair(lz + j),
-                     r2 = load_pair(squared + j);
-    sandwich[0] += r2 * (x * x);
-    sandwich[1] += r2 * (x * y);
-    sandwich[2] += r2 * (x * z);
-    sandwich[3] += r2 * (y * y);
-    sandwich[4] += r2 * (y * z);
-    sandwich[5] += r2 * (z * z);
-  }
-  if (j < count) {
-    const double x = lx[j], y = ly[j], z = lz[j], r2 = squared[j];
-    const double outer[6] = {x * x, x * y, x * z, y * y, y * z, z * z};
-    for (int k = 0; k < 6; ++k) sandwich[k][0] += r2 * outer[k];
-  }
-  if (inliers[0] + inliers[1] < 3) return infinite;
-  const Eigen::Matrix3d gram = sums.gram_matrix();
-  const Eigen::Matrix3d meat = symmetric_from_pairs(sandwich);
+  if (j < images) add(0, j);
+  for (int set = 0; set < 2; ++set)
+    for (int k = 0; k < 6; ++k) sandwich[set][k] = local[set][k];
+}
+
+// The predicted error from the inliers' sums: the sandwich's spread about
+// n and the inliers' own normal's disagreement with it.
+double error_from_sums(const Eigen::Matrix3d& gram, const Eigen::Matrix3d& meat,
+                       const Eigen::Vector3d& moment, const Eigen::Vector3d& n, double albedo) {
+  const double infinite = std::numeric_limits<double>::infinity();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
   eigen.computeDirect(gram);
   const Eigen::Vector3d lambda = eigen.eigenvalues();
@@ -121,9 +130,67 @@ double PixelErrorPredictor::predict(const PixelObservations& data, const Eigen::
   const Eigen::Matrix3d bread = tangent * inverse;
   const double spread =
       deg_from_rad(std::sqrt(std::max(0.0, (bread * meat * bread.transpose()).trace())) / albedo);
-  const Eigen::Vector3d fitted = inverse * sums.moment_vector();
+  const Eigen::Vector3d fitted = inverse * moment;
   const double disagreement = fitted.squaredNorm() > 0 ? angle_between_deg(fitted, n) : 180.0;
   return std::hypot(spread, disagreement);
+}
+
+}  // namespace
+
+void ConfidenceLanes::predict(const LightLanes& lanes, const Eigen::Vector3d* normals, const double* albedo,
+                              const bool* judged, double* errors) {
+  const double infinite = std::numeric_limits<double>::infinity();
+  const std::size_t images = lanes.images();
+  values_.resize(images);
+  misfit_.resize(images);
+  squared_.resize(images);
+  double* magnitude[kPixelLanes];
+  for (std::size_t lane = 0; lane < kPixelLanes; ++lane) {
+    magnitude_[lane].resize(images);
+    magnitude[lane] = magnitude_[lane].data();
+  }
+  // Lanes not judged take a harmless answer; their sums are not read.
+  PixelLanes nx = {}, ny = {}, nz = PixelLanes{} + 1.0, rho = PixelLanes{} + 1.0;
+  for (std::size_t lane = 0; lane < lanes.pixels; ++lane) {
+    if (!judged[lane]) continue;
+    nx[lane] = normals[lane].x();
+    ny[lane] = normals[lane].y();
+    nz[lane] = normals[lane].z();
+    rho[lane] = albedo[lane];
+  }
+  std::size_t lit[kPixelLanes] = {};
+  PixelLanes lit_sum = {};
+  misfits(lanes, nx, ny, nz, rho, options_.shadow_threshold, values_.data(), misfit_.data(), magnitude, lit,
+          lit_sum);
+  PixelLanes cut = {}, floor = {};
+  bool open[kPixelLanes] = {};
+  bool any = false;
+  for (std::size_t lane = 0; lane < lanes.pixels; ++lane) {
+    if (!judged[lane]) continue;
+    errors[lane] = infinite;
+    if (!(albedo[lane] > 0 && std::isfinite(albedo[lane])) || lit[lane] < 3) continue;
+    floor[lane] = options_.min_relative_sigma * lit_sum[lane] / static_cast<double>(lit[lane]);
+    // Three lit lights leave no spare one to judge them by: all are inliers (the
+    // cut at twice their median would drop one whenever rounding decides).
+    const auto half = static_cast<std::ptrdiff_t>(lit[lane] / 2);
+    cut[lane] =
+        lit[lane] == 3
+            ? infinite
+            : std::max(floor[lane], options_.trim * select_kth(magnitude[lane],
+                                                               static_cast<std::ptrdiff_t>(lit[lane]), half));
+    open[lane] = any = true;
+  }
+  if (!any) return;
+  NormalEquationLanes sums;
+  PixelLanes inliers[2] = {};
+  inlier_sums(lanes, values_.data(), misfit_.data(), cut, floor, sums, inliers, squared_.data());
+  PixelLanes sandwich[2][6] = {};
+  sandwich_sums(lanes, squared_.data(), sandwich);
+  for (std::size_t lane = 0; lane < lanes.pixels; ++lane) {
+    if (!open[lane] || inliers[0][lane] + inliers[1][lane] < 3) continue;
+    errors[lane] = error_from_sums(sums.gram_matrix(lane), NormalEquationLanes::symmetric(sandwich, lane),
+                                   sums.moment_vector(lane), normals[lane], albedo[lane]);
+  }
 }
 
 bool judged_normal(const cv::Vec3f& stored, Eigen::Vector3d& n) {
@@ -163,19 +230,35 @@ cv::Mat predict_normal_error(const Observations& observations, const SolveResult
     fail("predict_normal_error: result maps are {}x{}, observations {}x{}", result.normals.cols,
          result.normals.rows, observations.size.width, observations.size.height);
   cv::Mat error(observations.size, CV_32FC1, cv::Scalar::all(0));
-  parallel_chunks(
-      observations.pixel_count(), options.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-        PixelObservations data;
-        PixelErrorPredictor predictor(options);
-        Eigen::Vector3d n;
-        for (std::size_t p = begin; p < end; ++p) {
-          const cv::Point& at = observations.pixels[p];
-          if (result.solved.at<std::uint8_t>(at) == 0) continue;
-          if (!judged_normal(result.normals.at<cv::Vec3f>(at), n)) continue;
-          load_pixel(observations, p, true, data);
-          error.at<float>(at) = static_cast<float>(predictor.predict(data, n, result.albedo.at<float>(at)));
-        }
-      });
+  const Eigen::VectorXd reference =
+      observations.near ? near_light_reference(*observations.near) : Eigen::VectorXd();
+  parallel_chunks(observations.pixel_count(), options.threads,
+                  [&](std::size_t, std::size_t begin, std::size_t end) {
+                    // The judged pixels, kPixelLanes at a time.
+                    LightLanes lanes;
+                    ConfidenceLanes predictor(options);
+                    std::size_t group[kPixelLanes];
+                    Eigen::Vector3d normals[kPixelLanes];
+                    double albedo[kPixelLanes], errors[kPixelLanes];
+                    const bool judged[kPixelLanes] = {true, true, true, true};
+                    std::size_t count = 0;
+                    const auto flush = [&] {
+                      load_light_lanes(observations, reference, group, count, lanes);
+                      predictor.predict(lanes, normals, albedo, judged, errors);
+                      for (std::size_t lane = 0; lane < count; ++lane)
+                        error.at<float>(observations.pixels[group[lane]]) = static_cast<float>(errors[lane]);
+                      count = 0;
+                    };
+                    for (std::size_t p = begin; p < end; ++p) {
+                      const cv::Point& at = observations.pixels[p];
+                      if (result.solved.at<std::uint8_t>(at) == 0) continue;
+                      if (!judged_normal(result.normals.at<cv::Vec3f>(at), normals[count])) continue;
+                      albedo[count] = result.albedo.at<float>(at);
+                      group[count++] = p;
+                      if (count == kPixelLanes) flush();
+                    }
+                    if (count > 0) flush();
+                  });
   return error;
 }
 

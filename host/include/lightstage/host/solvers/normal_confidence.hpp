@@ -20,35 +20,13 @@
 
 #include "lightstage/host/radiometry.hpp"
 #include "lightstage/host/solvers/confidence_options.hpp"
-#include "lightstage/host/solvers/pixel_observations.hpp"
 #include "lightstage/host/solvers/solve_result.hpp"
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
-#include <vector>
-
 namespace lightstage {
-
-// One pixel's predicted error in degrees at the answer (n unit, ρ = albedo),
-// for a solver that has the pixel's data at hand (l2 solving pixel by pixel:
-// a near light's directions are worth computing once); +inf where the albedo
-// is not positive and finite, fewer than three inliers remain or they are
-// coplanar. Keeps its working arrays from pixel to pixel:
-// one per thread.
-class PixelErrorPredictor {
- public:
-  explicit PixelErrorPredictor(const ConfidenceOptions& options) : options_(options) {}
-  double predict(const PixelObservations& data, const Eigen::Vector3d& n, double albedo);
-
- private:
-  ConfidenceOptions options_;
-  std::vector<double> misfit_;  // images: |v − ρ lᵀn|, the Lambertian residual's size; NaN where not lit
-                                // or facing away from the answer
-  std::vector<double> magnitude_;  // images: the lit lights' |residual| first, reordered to find the
-                                   // median; then every light's floored r² (0 for an outlier)
-};
 
 // The unit normal the confidence judges for a solved pixel: the stored one,
 // or none (false) when it is not a normal.
