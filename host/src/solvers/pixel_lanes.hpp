@@ -54,13 +54,15 @@ class LaneBuffer {
 // take and give them by reference. `PixelLanes{} + x` gives x in every lane,
 // and `x - x == zero` marks the lanes where x is finite.
 
-// Up to kPixelLanes pixels' lights and observations, image by image.
+// Up to kPixelLanes pixels' lights and observations, image by image. One
+// per thread and solve: distant lights are filled in once.
 struct LightLanes {
-  std::size_t pixels = 0;  // lanes in use; the rest repeat the first pixel
-  LaneBuffer x, y, z;      // per image: unit direction, object -> light
-  LaneBuffer gain;         // per image: the near light's fall-off gain; empty: distant lights
-  LaneBuffer observed;     // per image: the observed value (a float, widened)
-  LaneBuffer unsaturated;  // per image: 0 where flagged saturated, else 1
+  std::size_t pixels = 0;                  // lanes in use; the rest repeat the first pixel
+  LaneBuffer x, y, z;                      // per image: unit direction, object -> light
+  LaneBuffer gain;                         // per image: the near light's fall-off gain; empty: distant lights
+  LaneBuffer observed;                     // per image: the observed value (a float, widened)
+  LaneBuffer unsaturated;                  // per image: 0 where flagged saturated, else 1
+  const double* distant_lights = nullptr;  // the distant lights x, y and z were filled from (once)
 
   std::size_t images() const { return observed.size(); }
   bool near_lights() const { return !gain.empty(); }
