@@ -1,6 +1,7 @@
 #include "report/html.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/parallel.hpp"
 #include "lightstage/host/io/image_io.hpp"
 
 #include <zlib.h>
@@ -67,15 +68,63 @@ std::string png_data_uri(const cv::Mat& image) {
   return "data:image/png;base64," + base64({reinterpret_cast<const std::uint8_t*>(png.data()), png.size()});
 }
 
-std::vector<std::uint8_t> zlib_compress(std::span<const std::uint8_t> bytes) {
-  uLongf size = compressBound(static_cast<uLong>(bytes.size()));
-  std::vector<std::uint8_t> out(size);
+namespace {
+
+// The payload is deflated in pieces of this many bytes side by side: a page's
+// viewer data (tens of MB at 2048²) was the last second of a solve on one
+// core. The split depends on the size alone, so the same bytes always give
+// the same page.
+constexpr std::size_t kDeflatePiece = std::size_t{4} << 20;
+
+// One piece as raw deflate: the last finished (BFINAL), every other ending
+// in a sync flush's empty stored block on a byte boundary, so that the
+// pieces in order are one deflate stream (RFC 1951), as pigz makes them.
+std::vector<std::uint8_t> deflate_piece(std::span<const std::uint8_t> piece, bool last) {
+  z_stream z{};
   // Level 1: the pages come out within a few percent of zlib's default level 6, in a third of the
   // time (docs/report.md).
-  const int status =
-      compress2(out.data(), &size, bytes.data(), static_cast<uLong>(bytes.size()), Z_BEST_SPEED);
-  if (status != Z_OK) fail("report: zlib compression of {} bytes failed (status {})", bytes.size(), status);
-  out.resize(size);
+  if (deflateInit2(&z, Z_BEST_SPEED, Z_DEFLATED, -MAX_WBITS, 8, Z_DEFAULT_STRATEGY) != Z_OK)
+    fail("report: zlib cannot start a compression ({})", z.msg != nullptr ? z.msg : "out of memory");
+  // deflateBound covers a finished stream; a sync flush adds at most an empty stored block.
+  std::vector<std::uint8_t> out(deflateBound(&z, static_cast<uLong>(piece.size())) + 16);
+  z.next_in = const_cast<Bytef*>(piece.data());  // zlib's API is not const; it only reads
+  z.avail_in = static_cast<uInt>(piece.size());
+  z.next_out = out.data();
+  z.avail_out = static_cast<uInt>(out.size());
+  const int status = deflate(&z, last ? Z_FINISH : Z_SYNC_FLUSH);
+  const bool done = last ? status == Z_STREAM_END : status == Z_OK && z.avail_in == 0 && z.avail_out > 0;
+  out.resize(out.size() - z.avail_out);
+  deflateEnd(&z);
+  if (!done) fail("report: zlib compression of {} bytes failed (status {})", piece.size(), status);
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> zlib_compress(std::span<const std::uint8_t> bytes) {
+  const std::size_t pieces = std::max<std::size_t>(1, (bytes.size() + kDeflatePiece - 1) / kDeflatePiece);
+  const auto piece = [&](std::size_t i) {
+    const std::size_t begin = i * kDeflatePiece;
+    return bytes.subspan(begin, std::min(kDeflatePiece, bytes.size() - begin));
+  };
+  std::vector<std::vector<std::uint8_t>> deflated(pieces);
+  std::vector<uLong> checks(pieces);
+  parallel_for(static_cast<int>(pieces), 0, [&](int i) {
+    const auto index = static_cast<std::size_t>(i);
+    const std::span<const std::uint8_t> part = piece(index);
+    deflated[index] = deflate_piece(part, index + 1 == pieces);
+    checks[index] = adler32(adler32(0, nullptr, 0), part.data(), static_cast<uInt>(part.size()));
+  });
+  // RFC 1950: CMF (deflate, a 32 KiB window) and FLG (the fastest level, a check that makes the
+  // pair a multiple of 31); the pieces; the Adler-32 of all the bytes, most significant first.
+  std::vector<std::uint8_t> out = {0x78, 0x01};
+  uLong check = checks[0];
+  for (std::size_t i = 0; i < pieces; ++i) {
+    out.insert(out.end(), deflated[i].begin(), deflated[i].end());
+    if (i > 0) check = adler32_combine(check, checks[i], static_cast<z_off_t>(piece(i).size()));
+  }
+  for (int shift = 24; shift >= 0; shift -= 8)
+    out.push_back(static_cast<std::uint8_t>((check >> shift) & 0xff));
   return out;
 }
 
