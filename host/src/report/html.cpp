@@ -117,10 +117,16 @@ std::vector<std::uint8_t> zlib_compress(std::span<const std::uint8_t> bytes) {
   });
   // RFC 1950: CMF (deflate, a 32 KiB window) and FLG (the fastest level, a check that makes the
   // pair a multiple of 31); the pieces; the Adler-32 of all the bytes, most significant first.
-  std::vector<std::uint8_t> out = {0x78, 0x01};
+  std::size_t total = 2 + 4;
+  for (const auto& part : deflated) total += part.size();
+  std::vector<std::uint8_t> out;
+  out.reserve(total);  // each piece freed once copied: the stream is held about once
+  out.push_back(0x78);
+  out.push_back(0x01);
   uLong check = checks[0];
   for (std::size_t i = 0; i < pieces; ++i) {
     out.insert(out.end(), deflated[i].begin(), deflated[i].end());
+    std::vector<std::uint8_t>().swap(deflated[i]);
     if (i > 0) check = adler32_combine(check, checks[i], static_cast<z_off_t>(piece(i).size()));
   }
   for (int shift = 24; shift >= 0; shift -= 8)
