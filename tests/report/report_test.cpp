@@ -187,6 +187,47 @@ TEST(LightStatistics, PartsAddUpToTheWholeAndComeBackFromJson) {
             std::string::npos);
 }
 
+// The tally sums four frames to a vector; each frame's sum must still be the
+// double of a loop over its pixels in order, and the counts exact. Seven
+// frames: one vector and three left over.
+TEST(LightStatistics, TallyIsEachFramesSumAndCountsOverThePixelsInOrder) {
+  constexpr int kFrames = 7, kPixels = 53;
+  constexpr double kThreshold = 0.25;
+  Observations observations;
+  observations.lights = Eigen::MatrixX3d::Zero(kFrames, 3);
+  observations.intensities.resize(kPixels, kFrames);
+  observations.saturated.resize(kPixels, kFrames);
+  for (int p = 0; p < kPixels; ++p) {
+    observations.pixels.emplace_back(p, 0);
+    for (int i = 0; i < kFrames; ++i) {
+      // Values of every size, so that the order of the sum shows in its last bits; some exactly at the
+      // threshold.
+      observations.intensities(p, i) = (p + i) % 11 == 0
+                                           ? static_cast<float>(kThreshold)
+                                           : static_cast<float>(std::pow(1.37, (p * 7 + i * 3) % 29) * 1e-3);
+      observations.saturated(p, i) = (p * 3 + i) % 5 == 0;
+    }
+  }
+  std::vector<std::string> files;
+  for (int i = 0; i < kFrames; ++i) files.push_back(fmt::format("{:03}.png", i));
+  report::LightStatisticsTally tally(files, {kThreshold, "the test's"});
+  tally.add(observations);
+  const nlohmann::json counted = tally.to_json();
+  for (int i = 0; i < kFrames; ++i) {
+    double sum = 0;
+    std::size_t clipped = 0, dark = 0;
+    for (int p = 0; p < kPixels; ++p) {
+      sum += observations.intensities(p, i);
+      clipped += observations.saturated(p, i) ? 1 : 0;
+      dark += observations.intensities(p, i) <= kThreshold ? 1 : 0;
+    }
+    const auto frame = static_cast<std::size_t>(i);
+    EXPECT_EQ(counted["sums"][frame].get<double>(), sum) << "frame " << i;
+    EXPECT_EQ(counted["saturated"][frame].get<std::size_t>(), clipped) << "frame " << i;
+    EXPECT_EQ(counted["shadow"][frame].get<std::size_t>(), dark) << "frame " << i;
+  }
+}
+
 TEST(Report, ShowsThePerLightStatisticsTheSolveRecordedWithoutDecodingTheStack) {
   const auto dir = testing::scratch_dir();
   const auto result = solved_result(dir);

@@ -1,8 +1,11 @@
 #include "lightstage/host/report/light_statistics.hpp"
 
 #include "lightstage/common/error.hpp"
+#include "lightstage/common/simd_clones.hpp"
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <utility>
 
 namespace lightstage::report {
@@ -23,6 +26,45 @@ LightStatistics frame_statistics(const Frame& frame) {
 void check_threshold(double shadow_threshold) {
   if (!(shadow_threshold >= 0) || !std::isfinite(shadow_threshold))
     fail("light statistics: shadow_threshold must be a number ≥ 0, got {}", shadow_threshold);
+}
+
+// Each frame's sum of values, clipped count and count at or below
+// `threshold` over pixels [0, pixels) of the row-major matrices, added to
+// sums[i], saturated[i], dark[i]. Pixel by pixel along the rows, four frames
+// to a vector: each frame's sum still runs over the pixels in order (the
+// same double as one frame at a time).
+LIGHTSTAGE_SIMD_CLONES void tally_frames(const float* values, const bool* clipped, std::size_t pixels,
+                                         std::size_t frames, double threshold, double* sums,
+                                         std::int64_t* saturated, std::int64_t* dark) {
+  using Doubles = double __attribute__((vector_size(4 * sizeof(double))));
+  using Floats = float __attribute__((vector_size(4 * sizeof(float))));
+  using Counts = std::int64_t __attribute__((vector_size(4 * sizeof(std::int64_t))));
+  const std::size_t vectors = frames / 4 * 4;
+  for (std::size_t p = 0; p < pixels; ++p) {
+    const float* row = values + p * frames;
+    const bool* flags = clipped + p * frames;
+    for (std::size_t i = 0; i < vectors; i += 4) {
+      Floats f;
+      Doubles sum;
+      Counts clip, shadow;
+      std::memcpy(&f, row + i, sizeof f);
+      std::memcpy(&sum, sums + i, sizeof sum);
+      std::memcpy(&clip, saturated + i, sizeof clip);
+      std::memcpy(&shadow, dark + i, sizeof shadow);
+      const Doubles v = __builtin_convertvector(f, Doubles);
+      sum += v;
+      clip += Counts{flags[i], flags[i + 1], flags[i + 2], flags[i + 3]};
+      shadow -= v <= threshold;  // a set lane is −1
+      std::memcpy(sums + i, &sum, sizeof sum);
+      std::memcpy(saturated + i, &clip, sizeof clip);
+      std::memcpy(dark + i, &shadow, sizeof shadow);
+    }
+    for (std::size_t i = vectors; i < frames; ++i) {
+      sums[i] += row[i];
+      saturated[i] += flags[i] ? 1 : 0;
+      dark[i] += static_cast<double>(row[i]) <= threshold ? 1 : 0;
+    }
+  }
 }
 
 }  // namespace
@@ -79,23 +121,15 @@ LightStatisticsTally::LightStatisticsTally(std::vector<std::string> files, Stati
 void LightStatisticsTally::add(const Observations& observations) {
   if (observations.image_count() != files_.size())
     fail("light statistics: {} observation columns for {} frames", observations.image_count(), files_.size());
-  // Pixel by pixel along the (row-major) matrices; each frame's sum still runs over the pixels in order.
   const std::size_t frames = files_.size();
   std::vector<double> sums(frames, 0.0);
-  std::vector<std::size_t> saturated(frames, 0), dark(frames, 0);
-  for (Eigen::Index p = 0; p < static_cast<Eigen::Index>(observations.pixel_count()); ++p) {
-    const float* values = observations.intensities.row(p).data();
-    const bool* clipped = observations.saturated.row(p).data();
-    for (std::size_t i = 0; i < frames; ++i) {
-      sums[i] += values[i];
-      saturated[i] += clipped[i] ? 1 : 0;
-      dark[i] += static_cast<double>(values[i]) <= threshold_.value ? 1 : 0;
-    }
-  }
+  std::vector<std::int64_t> saturated(frames, 0), dark(frames, 0);
+  tally_frames(observations.intensities.data(), observations.saturated.data(), observations.pixel_count(),
+               frames, threshold_.value, sums.data(), saturated.data(), dark.data());
   for (std::size_t i = 0; i < frames; ++i) {
     sums_[i] += sums[i];
-    saturated_[i] += saturated[i];
-    shadow_[i] += dark[i];
+    saturated_[i] += static_cast<std::size_t>(saturated[i]);
+    shadow_[i] += static_cast<std::size_t>(dark[i]);
   }
   pixels_ += observations.pixel_count();
 }
