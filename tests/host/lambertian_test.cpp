@@ -231,49 +231,52 @@ TEST(HostLambertian, ThreadCountDoesNotChangeResults) {
 // Pixels are solved four to a vector (solvers/pixel_lanes.hpp): dropping the
 // first k pixels moves every other pixel to another lane beside other
 // neighbours, and its normal, albedo, residual and predicted error must stay
-// the same floats. Near lights, noise, saturated and non-finite observations,
-// a never-lit pixel, and each of the threshold and T_low.
+// the same floats. Near and distant lights, noise, saturated and non-finite
+// observations, a never-lit pixel, and each of the threshold and T_low.
 TEST(HostLambertian, EveryPixelsAnswerIsTheSameInAnyLane) {
   auto scene = make_scene(13, 7, 15, 11, true);
-  Observations& full = scene.observations;
+  Observations& lit = scene.observations;
   std::mt19937 rng(4);
   std::normal_distribution<float> noise(0.0f, 0.01f);
-  for (Eigen::Index i = 0; i < full.intensities.size(); ++i) full.intensities.data()[i] += noise(rng);
-  for (Eigen::Index p = 0; p < full.intensities.rows(); p += 5) full.saturated(p, p % 15) = true;
-  full.intensities(9, 3) = std::numeric_limits<float>::quiet_NaN();
-  full.intensities(22, 7) = std::numeric_limits<float>::infinity();
-  full.intensities.row(30).setZero();
+  for (Eigen::Index i = 0; i < lit.intensities.size(); ++i) lit.intensities.data()[i] += noise(rng);
+  for (Eigen::Index p = 0; p < lit.intensities.rows(); p += 5) lit.saturated(p, p % 15) = true;
+  lit.intensities(9, 3) = std::numeric_limits<float>::quiet_NaN();
+  lit.intensities(22, 7) = std::numeric_limits<float>::infinity();
+  lit.intensities.row(30).setZero();
   NearLights near;
-  near.led_positions_mm = 300.0 * full.lights;
-  near.points_mm = Eigen::MatrixX3d::Zero(full.intensities.rows(), 3);
-  for (std::size_t p = 0; p < full.pixels.size(); ++p)
-    near.points_mm.row(static_cast<Eigen::Index>(p)) << 2.0 * full.pixels[p].x, 2.0 * full.pixels[p].y, 0;
-  full.near = near;
-  for (const double t_low : {1.0, 0.7}) {
-    SCOPED_TRACE(t_low);
-    L2Options options;
-    options.threads = 1;
-    options.t_low = t_low;
-    options.shadow_threshold = t_low < 1 ? -1 : 0.01;
-    options.confidence = ConfidenceOptions{};
-    const SolveResult whole = solve_lambertian(full, options);
-    ASSERT_GT(whole.summary.pixels_solved, 80u);
-    for (const Eigen::Index dropped : {1, 2, 3}) {
-      SCOPED_TRACE(dropped);
-      Observations shifted = full;
-      const Eigen::Index rest = full.intensities.rows() - dropped;
-      shifted.intensities = full.intensities.bottomRows(rest);
-      shifted.saturated = full.saturated.bottomRows(rest);
-      shifted.near->points_mm = near.points_mm.bottomRows(rest);
-      shifted.pixels.erase(shifted.pixels.begin(), shifted.pixels.begin() + dropped);
-      const SolveResult part = solve_lambertian(shifted, options);
-      for (const cv::Point& at : shifted.pixels) {
-        EXPECT_EQ(part.solved.at<std::uint8_t>(at), whole.solved.at<std::uint8_t>(at)) << at;
-        EXPECT_EQ(part.normals.at<cv::Vec3f>(at), whole.normals.at<cv::Vec3f>(at)) << at;
-        EXPECT_EQ(part.albedo.at<float>(at), whole.albedo.at<float>(at)) << at;
-        EXPECT_EQ(part.residual.at<float>(at), whole.residual.at<float>(at)) << at;
-        const float a = part.predicted_error.at<float>(at), b = whole.predicted_error.at<float>(at);
-        EXPECT_TRUE(a == b || (std::isinf(a) && std::isinf(b))) << at << ": " << a << " vs " << b;
+  near.led_positions_mm = 300.0 * lit.lights;
+  near.points_mm = Eigen::MatrixX3d::Zero(lit.intensities.rows(), 3);
+  for (std::size_t p = 0; p < lit.pixels.size(); ++p)
+    near.points_mm.row(static_cast<Eigen::Index>(p)) << 2.0 * lit.pixels[p].x, 2.0 * lit.pixels[p].y, 0;
+  for (const bool near_lights : {true, false}) {
+    Observations full = lit;
+    if (near_lights) full.near = near;
+    for (const double t_low : {1.0, 0.7}) {
+      SCOPED_TRACE(::testing::Message() << (near_lights ? "near" : "distant") << " lights, t_low " << t_low);
+      L2Options options;
+      options.threads = 1;
+      options.t_low = t_low;
+      options.shadow_threshold = t_low < 1 ? -1 : 0.01;
+      options.confidence = ConfidenceOptions{};
+      const SolveResult whole = solve_lambertian(full, options);
+      ASSERT_GT(whole.summary.pixels_solved, 80u);
+      for (const Eigen::Index dropped : {1, 2, 3}) {
+        SCOPED_TRACE(dropped);
+        Observations shifted = full;
+        const Eigen::Index rest = full.intensities.rows() - dropped;
+        shifted.intensities = full.intensities.bottomRows(rest);
+        shifted.saturated = full.saturated.bottomRows(rest);
+        if (near_lights) shifted.near->points_mm = near.points_mm.bottomRows(rest);
+        shifted.pixels.erase(shifted.pixels.begin(), shifted.pixels.begin() + dropped);
+        const SolveResult part = solve_lambertian(shifted, options);
+        for (const cv::Point& at : shifted.pixels) {
+          EXPECT_EQ(part.solved.at<std::uint8_t>(at), whole.solved.at<std::uint8_t>(at)) << at;
+          EXPECT_EQ(part.normals.at<cv::Vec3f>(at), whole.normals.at<cv::Vec3f>(at)) << at;
+          EXPECT_EQ(part.albedo.at<float>(at), whole.albedo.at<float>(at)) << at;
+          EXPECT_EQ(part.residual.at<float>(at), whole.residual.at<float>(at)) << at;
+          const float a = part.predicted_error.at<float>(at), b = whole.predicted_error.at<float>(at);
+          EXPECT_TRUE(a == b || (std::isinf(a) && std::isinf(b))) << at << ": " << a << " vs " << b;
+        }
       }
     }
   }

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 namespace lightstage::report {
 
@@ -70,21 +71,17 @@ std::string png_data_uri(const cv::Mat& image) {
 
 namespace {
 
-// The payload is deflated in pieces of this many bytes side by side: a page's
-// viewer data (tens of MB at 2048²) was the last second of a solve on one
-// core. The split depends on the size alone, so the same bytes always give
-// the same page.
-constexpr std::size_t kDeflatePiece = std::size_t{4} << 20;
-
-// One piece as raw deflate: the last finished (BFINAL), every other ending
-// in a sync flush's empty stored block on a byte boundary, so that the
-// pieces in order are one deflate stream (RFC 1951), as pigz makes them.
+// One piece as raw deflate, compressed on its own (no window from the piece
+// before): the last finished (BFINAL), every other ending in a sync flush's
+// empty stored block on a byte boundary, so that the pieces in order are one
+// deflate stream (RFC 1951).
 std::vector<std::uint8_t> deflate_piece(std::span<const std::uint8_t> piece, bool last) {
   z_stream z{};
   // Level 1: the pages come out within a few percent of zlib's default level 6, in a third of the
   // time (docs/report.md).
   if (deflateInit2(&z, Z_BEST_SPEED, Z_DEFLATED, -MAX_WBITS, 8, Z_DEFAULT_STRATEGY) != Z_OK)
     fail("report: zlib cannot start a compression ({})", z.msg != nullptr ? z.msg : "out of memory");
+  const std::unique_ptr<z_stream, int (*)(z_stream*)> end(&z, deflateEnd);
   // deflateBound covers a finished stream; a sync flush adds at most an empty stored block.
   std::vector<std::uint8_t> out(deflateBound(&z, static_cast<uLong>(piece.size())) + 16);
   z.next_in = const_cast<Bytef*>(piece.data());  // zlib's API is not const; it only reads
@@ -93,15 +90,15 @@ std::vector<std::uint8_t> deflate_piece(std::span<const std::uint8_t> piece, boo
   z.avail_out = static_cast<uInt>(out.size());
   const int status = deflate(&z, last ? Z_FINISH : Z_SYNC_FLUSH);
   const bool done = last ? status == Z_STREAM_END : status == Z_OK && z.avail_in == 0 && z.avail_out > 0;
-  out.resize(out.size() - z.avail_out);
-  deflateEnd(&z);
   if (!done) fail("report: zlib compression of {} bytes failed (status {})", piece.size(), status);
+  out.resize(out.size() - z.avail_out);
   return out;
 }
 
 }  // namespace
 
 std::vector<std::uint8_t> zlib_compress(std::span<const std::uint8_t> bytes) {
+  // Side by side: a 2048² result's viewer planes (23 MB) were the solve's last half second on one core.
   const std::size_t pieces = std::max<std::size_t>(1, (bytes.size() + kDeflatePiece - 1) / kDeflatePiece);
   const auto piece = [&](std::size_t i) {
     const std::size_t begin = i * kDeflatePiece;
@@ -120,7 +117,7 @@ std::vector<std::uint8_t> zlib_compress(std::span<const std::uint8_t> bytes) {
   std::size_t total = 2 + 4;
   for (const auto& part : deflated) total += part.size();
   std::vector<std::uint8_t> out;
-  out.reserve(total);  // each piece freed once copied: the stream is held about once
+  out.reserve(total);  // each piece freed once copied
   out.push_back(0x78);
   out.push_back(0x01);
   uLong check = checks[0];

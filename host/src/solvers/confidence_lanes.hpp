@@ -18,7 +18,7 @@ class ConfidenceLanes {
  public:
   explicit ConfidenceLanes(const ConfidenceOptions& options) : options_(options) {}
 
-  // errors[lane] for every lane of `lanes` in use: the predicted error in
+  // errors[lane] for every lane of `lanes` in use (LightLanes::used): the predicted error in
   // degrees at the answer (normals[lane] unit, albedo[lane]); +inf where the
   // albedo is not positive and finite, fewer than three inliers remain or
   // they are coplanar. Lanes not `judged` are left as they are. Keeps its

@@ -14,7 +14,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <numeric>
 #include <optional>
 #include <vector>
 
@@ -112,7 +111,7 @@ Counters solve_all(const Observations& obs, const L2Options& options, Maps& maps
 // value at unit light (the observed float divided by the near light's gain
 // as a float); per lane the kept lights.
 LIGHTSTAGE_SIMD_CLONES void kept_values(const LightLanes& lanes, double shadow_threshold, PixelLanes* weight,
-                                        PixelLanes* corrected, PixelLanes& kept) {
+                                        PixelLanes* corrected, PixelLanes& kept_count) {
   using FloatLanes = float __attribute__((vector_size(kPixelLanes * sizeof(float))));
   const PixelLanes zero = {}, one = PixelLanes{} + 1.0;
   const bool threshold = shadow_threshold >= 0;
@@ -129,7 +128,7 @@ LIGHTSTAGE_SIMD_CLONES void kept_values(const LightLanes& lanes, double shadow_t
                                                  PixelLanes)
                        : value;
   }
-  kept = count;
+  kept_count = count;
 }
 
 // The normal equations over the lights of weight 1.
@@ -137,18 +136,16 @@ LIGHTSTAGE_SIMD_CLONES void normal_equations(const LightLanes& lanes, const Pixe
                                              const PixelLanes* values, NormalEquationLanes& sums) {
   NormalEquationLanes local;  // in registers: the arrays could alias the caller's
   const PixelLanes zero = {};
-  const std::size_t images = lanes.images();
-  std::size_t j = 0;
-  for (; j + 2 <= images; j += 2) {
-    local.add(0, weight[j] != zero, lanes.x[j], lanes.y[j], lanes.z[j], values[j]);
-    local.add(1, weight[j + 1] != zero, lanes.x[j + 1], lanes.y[j + 1], lanes.z[j + 1], values[j + 1]);
-  }
-  if (j < images) local.add(0, weight[j] != zero, lanes.x[j], lanes.y[j], lanes.z[j], values[j]);
+  for_each_light_in_two_sets(
+      lanes.images(), [&](int set, std::size_t j) __attribute__((always_inline)) {
+        local.add(set, weight[j] != zero, lanes.x[j], lanes.y[j], lanes.z[j], values[j]);
+      });
   sums = local;
 }
 
 // Σ (lᵀs − v)² over the lights of weight 1: the even and the odd lights'
-// sums added, then the last of an odd count.
+// sums added, then the last of an odd count (after, not in the even set: as
+// the light pairs' sum was).
 LIGHTSTAGE_SIMD_CLONES void squared_residual(const LightLanes& lanes, const PixelLanes* weight,
                                              const PixelLanes* values, const PixelLanes& sx,
                                              const PixelLanes& sy, const PixelLanes& sz,
@@ -275,7 +272,7 @@ Counters solve_selected(const Observations& obs, const L2Options& options, Maps&
         judged[lane] = judged_normal(stored, normals[lane]);
         albedo[lane] = maps.albedo.at<float>(at);
       }
-      if (!predictor) continue;
+      if (!predictor || std::none_of(judged, judged + count, [](bool j) { return j; })) continue;
       predictor->predict(lanes, normals, albedo, judged, errors);
       for (std::size_t lane = 0; lane < count; ++lane)
         if (judged[lane])
@@ -312,26 +309,12 @@ SolveResult solve_lambertian(const Observations& observations, const L2Options& 
   options.check();
   const auto start = std::chrono::steady_clock::now();
   const cv::Size size = observations.size;
-  if (static_cast<std::size_t>(observations.intensities.rows()) != observations.pixel_count() ||
-      static_cast<std::size_t>(observations.intensities.cols()) != observations.image_count()) {
-    fail("solve_lambertian: observations are {}x{}, expected {} pixels x {} images",
-         observations.intensities.rows(), observations.intensities.cols(), observations.pixel_count(),
-         observations.image_count());
-  }
+  // The matrices' sizes, the saturation flags the lanes read and the near lights' tables.
+  check_observations(observations, "solve_lambertian");
   Maps maps{cv::Mat(size, CV_32FC3, cv::Scalar::all(0)), cv::Mat(size, CV_32FC1, cv::Scalar::all(0)),
             cv::Mat(size, CV_32FC1, cv::Scalar::all(0)), cv::Mat(size, CV_8UC1, cv::Scalar::all(0)),
             cv::Mat()};
-  if (options.confidence) {
-    options.confidence->check();
-    check_observations(observations, "solve_lambertian");  // the saturation flags the confidence reads
-  }
-  if (observations.near &&
-      (observations.near->image_count() != observations.image_count() ||
-       static_cast<std::size_t>(observations.near->points_mm.rows()) != observations.pixel_count())) {
-    fail("solve_lambertian: near lights for {} images x {} pixels, observations have {} x {}",
-         observations.near->image_count(), observations.near->points_mm.rows(), observations.image_count(),
-         observations.pixel_count());
-  }
+  if (options.confidence) options.confidence->check();
   // Near lights: every pixel has its own lights, so no shared pseudo-inverse.
   const bool all = options.shadow_threshold < 0 && options.t_low >= 1.0 && !observations.near;
   if (options.confidence && !all) maps.predicted_error = cv::Mat(size, CV_32FC1, cv::Scalar::all(0));

@@ -50,7 +50,7 @@ LIGHTSTAGE_SIMD_CLONES void gather_rows(const float* const* values, const bool* 
 void load_light_lanes(const Observations& observations, const Eigen::VectorXd& reference,
                       const std::size_t* pixels, std::size_t count, LightLanes& out) {
   const auto images = static_cast<std::size_t>(observations.intensities.cols());
-  out.pixels = count;
+  out.used = count;
   out.observed.resize(images);
   out.unsaturated.resize(images);
   const float* values[kPixelLanes];
@@ -72,9 +72,9 @@ void load_light_lanes(const Observations& observations, const Eigen::VectorXd& r
     const Eigen::MatrixX3d& lights = observations.lights;
     for (std::size_t j = 0; j < images; ++j) {
       const auto i = static_cast<Eigen::Index>(j);
-      out.x[j] = PixelLanes{} + lights(i, 0);
-      out.y[j] = PixelLanes{} + lights(i, 1);
-      out.z[j] = PixelLanes{} + lights(i, 2);
+      out.x[j] = lights(i, 0) - PixelLanes{};
+      out.y[j] = lights(i, 1) - PixelLanes{};
+      out.z[j] = lights(i, 2) - PixelLanes{};
     }
     out.distant_lights = lights.data();
     return;

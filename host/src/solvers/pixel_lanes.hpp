@@ -7,9 +7,8 @@
 //
 // Each lane's arithmetic is what one pixel's would be alone, in a fixed
 // order: a pixel's sums take its even lights into one set and its odd lights
-// into another, added at the end (the last of an odd count in the even set),
-// so a pixel's answer is the same float in any lane, beside any neighbours,
-// in any band.
+// into another, added at the end (for_each_light_in_two_sets), so a pixel's
+// answer is the same float in any lane, beside any neighbours, in any band.
 
 #include "lightstage/host/radiometry.hpp"
 
@@ -26,7 +25,7 @@ inline constexpr std::size_t kPixelLanes = 4;
 using PixelLanes =
     double __attribute__((vector_size(kPixelLanes * sizeof(double)), aligned(kPixelLanes * sizeof(double))));
 using PixelMask = decltype(PixelLanes{} < PixelLanes{});
-static_assert(alignof(PixelLanes) == sizeof(PixelLanes));  // masks live in registers only
+static_assert(alignof(PixelLanes) == sizeof(PixelLanes));  // masks are never stored
 
 // Per-image lanes, each aligned to its size (a standard container of
 // PixelLanes would drop the type's alignment attribute).
@@ -51,13 +50,13 @@ class LaneBuffer {
 // A vector wider than the baseline's registers never crosses a call by
 // value (its ABI differs by instruction set, and GCC 12 fails to build such a
 // call into functions made for several, LIGHTSTAGE_SIMD_CLONES): functions
-// take and give them by reference. `PixelLanes{} + x` gives x in every lane,
-// and `x - x == zero` marks the lanes where x is finite.
+// take and give them by reference. `x - PixelLanes{}` gives x in every lane
+// (−0 too), and `x - x == zero` marks the lanes where x is finite.
 
 // Up to kPixelLanes pixels' lights and observations, image by image. One
 // per thread and solve: distant lights are filled in once.
 struct LightLanes {
-  std::size_t pixels = 0;                  // lanes in use; the rest repeat the first pixel
+  std::size_t used = 0;                    // lanes in use; the rest repeat the first pixel
   LaneBuffer x, y, z;                      // per image: unit direction, object -> light
   LaneBuffer gain;                         // per image: the near light's fall-off gain; empty: distant lights
   LaneBuffer observed;                     // per image: the observed value (a float, widened)
@@ -75,14 +74,26 @@ struct LightLanes {
 void load_light_lanes(const Observations& observations, const Eigen::VectorXd& reference,
                       const std::size_t* pixels, std::size_t count, LightLanes& out);
 
+// Calls add(set, j) for every image j in order: set 0 for the even images,
+// 1 for the odd ones (a constant in each call, so sums stay in registers).
+template <typename Add>
+[[gnu::always_inline]] inline void for_each_light_in_two_sets(std::size_t images, Add&& add) {
+  std::size_t j = 0;
+  for (; j + 2 <= images; j += 2) {
+    add(0, j);
+    add(1, j + 1);
+  }
+  if (j < images) add(0, j);  // the last of an odd count is even
+}
+
 // Σ l lᵀ and Σ v l over the lights a mask keeps, per lane, in two sets (even
 // and odd lights). A light left out adds exact zeros: its value is not read.
 struct NormalEquationLanes {
   PixelLanes gram[2][6] = {};    // Σ l lᵀ, upper triangle (xx, xy, xz, yy, yz, zz)
   PixelLanes moment[2][3] = {};  // Σ v l
 
-  void add(int set, const PixelMask& keep, const PixelLanes& lx, const PixelLanes& ly, const PixelLanes& lz,
-           const PixelLanes& value) {
+  [[gnu::always_inline]] void add(int set, const PixelMask& keep, const PixelLanes& lx, const PixelLanes& ly,
+                                  const PixelLanes& lz, const PixelLanes& value) {
     const PixelLanes zero = {};
     const PixelLanes x = keep ? lx : zero, y = keep ? ly : zero, z = keep ? lz : zero;
     const PixelLanes v = keep ? value : zero;

@@ -28,17 +28,10 @@ void check_observations(const Observations& observations, const char* who) {
   }
 }
 
-void load_pixel(const Observations& observations, std::size_t pixel, bool drop_saturated,
-                PixelObservations& out) {
-  if (observations.near) {
-    near_light_directions(*observations.near, pixel, out.lights, out.near_gains);
-  } else {
-    out.lights = observations.lights;
-    out.near_gains.resize(0);
-  }
-  load_pixel_values(observations, pixel, drop_saturated, out);
-}
+namespace {
 
+// load_pixel's values and usable flags, `out.lights` and `out.near_gains`
+// (empty: distant) set for this pixel already.
 void load_pixel_values(const Observations& observations, std::size_t pixel, bool drop_saturated,
                        PixelObservations& out) {
   const auto row = static_cast<Eigen::Index>(pixel);
@@ -52,6 +45,19 @@ void load_pixel_values(const Observations& observations, std::size_t pixel, bool
     const bool saturated = drop_saturated && flags && observations.saturated(row, j);
     if (!std::isfinite(out.values(j)) || saturated) out.usable[static_cast<std::size_t>(j)] = 0;
   }
+}
+
+}  // namespace
+
+void load_pixel(const Observations& observations, std::size_t pixel, bool drop_saturated,
+                PixelObservations& out) {
+  if (observations.near) {
+    near_light_directions(*observations.near, pixel, out.lights, out.near_gains);
+  } else {
+    out.lights = observations.lights;
+    out.near_gains.resize(0);
+  }
+  load_pixel_values(observations, pixel, drop_saturated, out);
 }
 
 }  // namespace lightstage

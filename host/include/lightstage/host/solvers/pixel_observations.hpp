@@ -31,10 +31,6 @@ struct PixelObservations {
 // saturated observations are marked unusable.
 void load_pixel(const Observations& observations, std::size_t pixel, bool drop_saturated,
                 PixelObservations& out);
-// load_pixel's values and usable flags alone, for a caller that has set
-// `out.lights` and `out.near_gains` (empty: distant) for this pixel already.
-void load_pixel_values(const Observations& observations, std::size_t pixel, bool drop_saturated,
-                       PixelObservations& out);
 
 // Throws InputError (naming `who`) when the observation matrix, flags or
 // near-light tables do not match the pixel and image counts.

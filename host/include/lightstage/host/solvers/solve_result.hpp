@@ -71,7 +71,8 @@ struct SolveResult {
   // Optional per-pixel outputs (empty when a method does not produce them):
   cv::Mat confidence;  // CV_32FC1 in [0, 1] from the predicted error (normal_confidence.hpp; solve_with)
   // CV_32FC1, degrees: the error a solver predicted itself at its answer, on the horizon where it faced
-  // away (l2 solving pixel by pixel, L2Options::confidence); solve_with makes `confidence` of it.
+  // away (l2 solving pixel by pixel or four to a vector, L2Options::confidence); solve_with makes
+  // `confidence` of it.
   cv::Mat predicted_error;
   // Colour stacks: CV_32FC3 (b, g, r, OpenCV's order) chroma of radiometry.hpp,
   // the colour albedo being albedo · chroma; 0 where not solved (solve_with).
