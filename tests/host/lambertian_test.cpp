@@ -282,6 +282,21 @@ TEST(HostLambertian, EveryPixelsAnswerIsTheSameInAnyLane) {
   }
 }
 
+// Every l2 solve reads the saturation flags four pixels at a time, with or
+// without its confidence: flags of another shape are refused by name, never read.
+TEST(HostLambertian, RefusesSaturationFlagsOfAnotherShape) {
+  auto scene = make_scene(5, 4, 9, 12, false);
+  scene.observations.saturated = FlagMatrix::Constant(3, 9, false);
+  L2Options options;
+  options.shadow_threshold = 0.01;
+  try {
+    solve_lambertian(scene.observations, options);
+    FAIL() << "flags of 3 rows for 20 pixels accepted";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("saturation flags are 3x9"), std::string::npos) << error.what();
+  }
+}
+
 TEST(HostLambertian, OptionsCheckNamesTheField) {
   const auto message = [](const L2Options& options) {
     try {
