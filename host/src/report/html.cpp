@@ -91,7 +91,7 @@ std::vector<std::uint8_t> deflate_piece(std::span<const std::uint8_t> piece, boo
   const int status = deflate(&z, last ? Z_FINISH : Z_SYNC_FLUSH);
   const bool done = last ? status == Z_STREAM_END : status == Z_OK && z.avail_in == 0 && z.avail_out > 0;
   if (!done) fail("report: zlib compression of {} bytes failed (status {})", piece.size(), status);
-  out.resize(out.size() - z.avail_out);
+  out.erase(out.end() - static_cast<std::ptrdiff_t>(z.avail_out), out.end());  // shrinks only
   return out;
 }
 
