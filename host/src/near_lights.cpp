@@ -43,18 +43,13 @@ Eigen::VectorXd near_light_reference(const NearLights& near) {
   return reference;
 }
 
-void near_light_directions(const NearLights& near, const Eigen::VectorXd& reference, std::size_t pixel,
-                           Eigen::MatrixX3d& directions, Eigen::VectorXd& gains) {
-  directions_and_distances(near, pixel, directions, gains);
-  gains = reference.array() / gains.array();
-}
-
 void near_light_directions(const NearLights& near, std::size_t pixel, Eigen::MatrixX3d& directions,
                            Eigen::VectorXd& gains) {
   // Kept from call to call: a caller pixel by pixel allocates nothing.
   thread_local Eigen::VectorXd reference;
   reference_distances(near, reference);
-  near_light_directions(near, reference, pixel, directions, gains);
+  directions_and_distances(near, pixel, directions, gains);
+  gains = reference.array() / gains.array();
 }
 
 Eigen::MatrixX3d points_on_plane(const std::vector<cv::Point>& pixels, const PixelRay& ray, double plane_z_mm,

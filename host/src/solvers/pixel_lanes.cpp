@@ -53,22 +53,24 @@ void load_light_lanes(const Observations& observations, const Eigen::VectorXd& r
   out.used = count;
   out.observed.resize(images);
   out.unsaturated.resize(images);
+  out.x.resize(images);
+  out.y.resize(images);
+  out.z.resize(images);
+  std::size_t rows[kPixelLanes];  // lanes past `count` repeat the first pixel
   const float* values[kPixelLanes];
   const bool* saturated[kPixelLanes];
   const bool flags = observations.saturated.size() != 0;
   for (std::size_t lane = 0; lane < kPixelLanes; ++lane) {
-    const auto row = static_cast<Eigen::Index>(pixels[lane < count ? lane : 0]);
+    rows[lane] = pixels[lane < count ? lane : 0];
+    const auto row = static_cast<Eigen::Index>(rows[lane]);
     values[lane] = observations.intensities.row(row).data();
     saturated[lane] = flags ? observations.saturated.row(row).data() : nullptr;
   }
   gather_rows(values, flags ? saturated : nullptr, images, out.observed.data(), out.unsaturated.data());
   if (!observations.near) {
     // The same for every pixel: filled once.
-    if (out.distant_lights == observations.lights.data() && out.x.size() == images) return;
+    if (out.distant_lights == observations.lights.data()) return;
     out.gain.clear();
-    out.x.resize(images);
-    out.y.resize(images);
-    out.z.resize(images);
     const Eigen::MatrixX3d& lights = observations.lights;
     for (std::size_t j = 0; j < images; ++j) {
       const auto i = static_cast<Eigen::Index>(j);
@@ -81,13 +83,10 @@ void load_light_lanes(const Observations& observations, const Eigen::VectorXd& r
   }
   const NearLights& near = *observations.near;
   out.distant_lights = nullptr;
-  out.x.resize(images);
-  out.y.resize(images);
-  out.z.resize(images);
   out.gain.resize(images);
   PixelLanes px, py, pz;
   for (std::size_t lane = 0; lane < kPixelLanes; ++lane) {
-    const auto row = static_cast<Eigen::Index>(pixels[lane < count ? lane : 0]);
+    const auto row = static_cast<Eigen::Index>(rows[lane]);
     px[lane] = near.points_mm(row, 0);
     py[lane] = near.points_mm(row, 1);
     pz[lane] = near.points_mm(row, 2);

@@ -28,9 +28,6 @@ void near_light_directions(const NearLights& near, std::size_t pixel, Eigen::Mat
                            Eigen::VectorXd& gains);
 // |p_j − c|² for every LED: the gains' numerators, the same for every pixel.
 Eigen::VectorXd near_light_reference(const NearLights& near);
-// As above, for a caller that computed near_light_reference(near) once for its pixels.
-void near_light_directions(const NearLights& near, const Eigen::VectorXd& reference, std::size_t pixel,
-                           Eigen::MatrixX3d& directions, Eigen::VectorXd& gains);
 
 // The viewing ray through image point (u, v) (pixel (col, row) centred at
 // (col + 0.5, row + 0.5)): origin and unit direction, dome frame, mm.
