@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
 #include <exception>
 #include <mutex>
 #include <thread>
@@ -49,32 +50,126 @@ int reserve_helpers(int wanted) {
   return granted;
 }
 
+// A call's workers, open to every thread of the process that runs out of
+// work of its own: a thread whose share is done, or whose caller waits for
+// its helpers, takes a worker not yet started from any open call under the
+// same outermost call (a worker of parallel_for takes indices until none
+// remain). No thread is added for it, so the limit holds, and work that nests
+// unevenly (two tasks side by side, each running its own calls on one thread)
+// still keeps every thread busy. Work of another outermost call (another
+// thread's command) is never taken: its end would hold up this one's.
+struct Job {
+  const void* root = nullptr;  // the outermost call's job
+  const std::function<void(std::size_t)>* worker = nullptr;
+  std::size_t count = 0;
+  std::size_t next = 0;  // the next worker to start; guarded by job_mutex
+  int running = 0;       // workers started and not finished, and helpers not done; guarded by job_mutex
+};
+
+std::mutex job_mutex;
+std::condition_variable job_changed;
+std::vector<Job*> open_jobs;                      // jobs with workers not yet started
+thread_local const void* current_root = nullptr;  // of the outermost call this thread works for
+
+// A worker of an open job under this thread's outermost call, other than
+// `except`, claimed (counted running), or null. Call with job_mutex held.
+Job* claim_open_job(const Job* except, std::size_t& worker) {
+  for (Job* job : open_jobs) {
+    if (job == except || job->root != current_root || job->next >= job->count) continue;
+    worker = job->next++;
+    ++job->running;
+    return job;
+  }
+  return nullptr;
+}
+
+// Runs a claimed worker, then the job's next ones until none is left.
+void run_claimed(Job& job, std::size_t worker) {
+  for (;;) {
+    (*job.worker)(worker);
+    const std::lock_guard lock(job_mutex);
+    --job.running;
+    if (job.next >= job.count) {
+      if (job.running == 0) job_changed.notify_all();
+      return;
+    }
+    worker = job.next++;
+    ++job.running;
+  }
+}
+
+// Runs workers of open jobs until there are none to start.
+void help_open_jobs() {
+  for (;;) {
+    std::size_t worker = 0;
+    Job* job = nullptr;
+    {
+      const std::lock_guard lock(job_mutex);
+      job = claim_open_job(nullptr, worker);
+    }
+    if (job == nullptr) return;
+    run_claimed(*job, worker);
+  }
+}
+
 // Runs worker(0 .. count-1), worker(0) on the caller's thread, the others on
-// helpers (reserve_helpers): with fewer helpers than workers, a thread runs
-// several workers one after the other. Joins them all. `worker` must not throw.
+// helpers (reserve_helpers) and on any thread that runs out of work while
+// they wait (Job). Returns when every worker has finished and every helper
+// is done. `worker` must not throw.
 void run_workers(std::size_t count, const std::function<void(std::size_t)>& worker) {
   const bool outermost = !inside_parallel_work;
   std::vector<std::thread> threads;
   // Reserved before the threads are counted busy: below, only a thread's start can throw.
   threads.reserve(count - 1);
   const auto helpers = static_cast<std::size_t>(reserve_helpers(static_cast<int>(count) - 1));
-  const std::size_t stride = helpers + 1;
-  const auto run_share = [&worker, count, stride](std::size_t first) {
-    inside_parallel_work = true;
-    for (std::size_t w = first; w < count; w += stride) worker(w);
-  };
+  inside_parallel_work = true;
+  Job job;
+  if (outermost) current_root = &job;
+  job.root = current_root;
+  job.worker = &worker;
+  job.count = count;
+  // Worker 0 is the caller's, worker h helper h's; the rest go to whichever thread is free first.
+  job.next = 1 + helpers;
+  // Each worker until it finishes, each helper until it is done.
+  job.running = 1 + 2 * static_cast<int>(helpers);
+  if (count > 1) {
+    const std::lock_guard lock(job_mutex);
+    open_jobs.push_back(&job);
+    job_changed.notify_all();
+  }
   for (std::size_t h = 1; h <= helpers; ++h) {
     count_helper(+1);
-    threads.emplace_back([&run_share, h] {
-      run_share(h);
+    threads.emplace_back([&job, h] {
+      inside_parallel_work = true;
+      current_root = job.root;
+      run_claimed(job, h);
+      help_open_jobs();
       count_helper(-1);
       --busy_threads;
+      const std::lock_guard lock(job_mutex);
+      if (--job.running == 0) job_changed.notify_all();
     });
   }
-  run_share(0);
+  run_claimed(job, 0);
+  {
+    std::unique_lock lock(job_mutex);
+    for (;;) {
+      if (job.running == 0) break;
+      std::size_t other = 0;
+      if (Job* open = claim_open_job(&job, other)) {
+        lock.unlock();
+        run_claimed(*open, other);
+        lock.lock();
+        continue;
+      }
+      job_changed.wait(lock);
+    }
+    if (count > 1) open_jobs.erase(std::find(open_jobs.begin(), open_jobs.end(), &job));
+  }
   for (auto& thread : threads) thread.join();
   if (outermost) {
     inside_parallel_work = false;
+    current_root = nullptr;
     --busy_threads;
   }
 }

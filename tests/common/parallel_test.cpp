@@ -111,6 +111,82 @@ TEST(ParallelPeakThreads, NestedWorkTakesOnlyTheFreeThreadsOfTheLimit) {
   for (std::size_t i = 0; i < calls.size(); ++i) EXPECT_EQ(calls[i].load(), 1) << i;
 }
 
+TEST(ParallelPeakThreads, AThreadWhoseWorkIsDoneJoinsANestedCallOfTheSameCommand) {
+  // Two tasks on a limit of two: the second's inner call starts while both threads are busy, so it
+  // starts on its own thread alone. The first task's thread, once free, must take its other index (its
+  // indices wait for each other): as the caller waiting for its call (task order 0) or as its helper.
+  const ThreadLimit limit(2);
+  for (const bool first_on_caller : {true, false}) {
+    SCOPED_TRACE(first_on_caller ? "the quick task on the caller's thread" : "the quick task on a helper");
+    reset_parallel_peak_threads();
+    std::atomic<bool> inner_started{false};
+    std::atomic<int> arrived{0};
+    std::mutex mutex;
+    std::vector<std::thread::id> inner_threads;
+    const std::function<void()> quick = [&] {
+      while (!inner_started.load()) std::this_thread::yield();
+    };
+    const std::function<void()> nesting = [&] {
+      parallel_for(2, 2, [&](int) {
+        {
+          const std::lock_guard lock(mutex);
+          inner_threads.push_back(std::this_thread::get_id());
+        }
+        inner_started = true;
+        meet(arrived, 2);
+      });
+    };
+    parallel_invoke(first_on_caller ? std::vector{quick, nesting} : std::vector{nesting, quick}, 2);
+    ASSERT_EQ(inner_threads.size(), 2u);
+    EXPECT_NE(inner_threads[0], inner_threads[1]) << "the free thread did not join the inner call";
+    EXPECT_EQ(parallel_peak_threads(), 2) << "joining adds no thread";
+  }
+}
+
+TEST(ParallelPeakThreads, NoThreadTakesWorkOfAnotherCommandsCall) {
+  // One command's caller waits for its slow task while another thread's command runs an inner call with
+  // no thread free: the waiting caller must not take the inner call's index (its end would hold up the
+  // first command's), so the inner indices run one after the other on their own thread.
+  const ThreadLimit limit(2);
+  std::atomic<bool> other_done{false};
+  std::atomic<int> arrived{0};
+  std::mutex mutex;
+  std::vector<std::thread::id> inner_threads;
+  std::thread::id other_thread;
+  std::atomic<bool> waiting{false}, slow_started{false};
+  const auto slow = [&] {
+    slow_started = true;
+    while (!other_done.load()) std::this_thread::yield();
+  };
+  // Ends once the helper has the slow task, leaving the caller waiting.
+  const auto quick = [&] {
+    while (!slow_started.load()) std::this_thread::yield();
+    waiting = true;
+  };
+  std::thread other([&] {
+    while (!waiting.load()) std::this_thread::yield();
+    other_thread = std::this_thread::get_id();
+    parallel_for(1, 1, [&](int) {
+      parallel_for(2, 2, [&](int) {
+        {
+          const std::lock_guard lock(mutex);
+          inner_threads.push_back(std::this_thread::get_id());
+        }
+        // Short: only how long the test takes when it passes.
+        const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
+        ++arrived;
+        while (arrived.load() < 2 && std::chrono::steady_clock::now() < deadline) std::this_thread::yield();
+      });
+    });
+    other_done = true;
+  });
+  parallel_invoke({quick, slow}, 2);
+  other.join();
+  ASSERT_EQ(inner_threads.size(), 2u);
+  EXPECT_EQ(inner_threads[0], other_thread);
+  EXPECT_EQ(inner_threads[1], other_thread);
+}
+
 // (chunk, begin, end) of every call, sorted by chunk.
 std::vector<std::tuple<std::size_t, std::size_t, std::size_t>> chunks_of(std::size_t count, int threads,
                                                                          std::size_t* used = nullptr) {

@@ -59,7 +59,8 @@ std::string limit_for_rows(const fs::path& stack, int rows,
   const BandPlan whole =
       plan_bands(outline, std::numeric_limits<std::size_t>::max(), coefficient_terms(settings.method),
                  solver_working_bytes(settings, outline.images));
-  return std::to_string(whole.fixed_bytes + static_cast<std::size_t>(rows) * whole.row_bytes);
+  return std::to_string(whole.fixed_bytes +
+                        static_cast<std::size_t>(rows) * (whole.row_bytes + whole.read_ahead_row_bytes));
 }
 
 void expect_same_map(const cv::Mat& a, const cv::Mat& b, const std::string& what) {

@@ -80,7 +80,8 @@ TEST_F(SolveThreads, BandsTilesAndABatchRunOnTheThreadsAsked) {
   const io::StackOutline outline = io::read_stack_outline(*stack_);
   const BandPlan whole = plan_bands(outline, std::numeric_limits<std::size_t>::max(), coefficient_terms("l2"),
                                     solver_working_bytes(settings_for("l2", 1), outline.images));
-  const std::string six_rows = std::to_string(whole.fixed_bytes + 6 * whole.row_bytes);
+  const std::string six_rows =
+      std::to_string(whole.fixed_bytes + 6 * (whole.row_bytes + whole.read_ahead_row_bytes));
   const fs::path captures = out_ / "captures";
   fs::create_directories(captures);
   fs::create_directory_symlink(*stack_, captures / "a");

@@ -40,7 +40,8 @@ SolveSettings settings_for(const std::string& method, const fs::path& stack, int
   s.method = method;
   s.threads = 2;
   const BandPlan whole = plan_bands(io::read_stack_outline(stack), std::numeric_limits<std::size_t>::max());
-  s.memory_limit = std::to_string(whole.fixed_bytes + static_cast<std::size_t>(band_rows) * whole.row_bytes);
+  s.memory_limit = std::to_string(whole.fixed_bytes + static_cast<std::size_t>(band_rows) *
+                                                          (whole.row_bytes + whole.read_ahead_row_bytes));
   s.resolve();
   return s;
 }

@@ -4,6 +4,7 @@
 
 #include "lightstage/common/error.hpp"
 #include "lightstage/common/log.hpp"
+#include "lightstage/common/parallel.hpp"
 #include "lightstage/host/io/solve_output.hpp"
 #include "lightstage/host/radiometry.hpp"
 #include "lightstage/host/solvers/auto.hpp"
@@ -18,6 +19,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <utility>
+#include <vector>
 
 namespace lightstage::pipeline::bands {
 namespace {
@@ -177,6 +179,18 @@ std::size_t BandSolver::mask_pixels(int begin, int end) const {
                             : static_cast<std::size_t>(cv::countNonZero(meta_.mask.rowRange(begin, end)));
 }
 
+ImageStack BandSolver::read_band(int y0, int rows) {
+  ImageStack band = read_region_rows(stack_, region_, region_.y + y0, rows);
+  for (std::size_t i = 0; i < band.frames.size(); ++i) {
+    Frame frame = meta_.frames[i];
+    frame.image = band.frames[i].image;
+    frame.dark = band.frames[i].dark;
+    band.frames[i] = std::move(frame);
+  }
+  if (response_.response) apply_response(*response_.response, band, input_.string());
+  return band;
+}
+
 void BandSolver::for_each_band(int begin, int end, const BandVisit& visit) {
   // A pixel's place among the region's mask pixels seeds its random draws.
   std::size_t first_pixel = mask_pixels(0, begin);
@@ -184,17 +198,11 @@ void BandSolver::for_each_band(int begin, int end, const BandVisit& visit) {
   if (!band_ends_.empty() && (begin != 0 || end != size().height))
     throw std::logic_error(
         fmt::format("rpca's bands cover rows 0 to {}, not {} to {}", size().height, begin, end));
-  std::size_t index = 0;
-  for (int y0 = begin; y0 < end; ++index) {
-    const int rows = band_ends_.empty() ? std::min(plan_.band_rows, end - y0) : band_ends_.at(index) - y0;
-    ImageStack band = read_region_rows(stack_, region_, region_.y + y0, rows);
-    for (std::size_t i = 0; i < band.frames.size(); ++i) {
-      Frame frame = meta_.frames[i];
-      frame.image = band.frames[i].image;
-      frame.dark = band.frames[i].dark;
-      band.frames[i] = std::move(frame);
-    }
-    if (response_.response) apply_response(*response_.response, band, input_.string());
+  std::vector<std::pair<int, int>> bands;  // each band's first row and rows
+  for (int y0 = begin; y0 < end; y0 += bands.back().second)
+    bands.emplace_back(
+        y0, band_ends_.empty() ? std::min(plan_.band_rows, end - y0) : band_ends_.at(bands.size()) - y0);
+  const auto solve = [&](ImageStack& band, int y0, int rows) {
     // rpca's blocks need its band whole.
     const int step = band_ends_.empty()
                          ? part_rows(band.width(), band.frames.size(), settings_.band_part_bytes, rows)
@@ -208,7 +216,20 @@ void BandSolver::for_each_band(int begin, int end, const BandVisit& visit) {
       first_pixel += observations.pixel_count();
       visit(part, observations, y0 + top);
     }
-    y0 += rows;
+  };
+  // The next band is read while this one is solved (the plan holds two bands' frames): the threads
+  // one leaves idle, at its serial steps or its last rows, decode the other's.
+  ImageStack band = bands.empty() ? ImageStack{} : read_band(bands.front().first, bands.front().second);
+  for (std::size_t k = 0; k < bands.size(); ++k) {
+    if (k + 1 == bands.size()) {
+      solve(band, bands[k].first, bands[k].second);
+      break;
+    }
+    ImageStack next;
+    parallel_invoke({[&] { solve(band, bands[k].first, bands[k].second); },
+                     [&] { next = read_band(bands[k + 1].first, bands[k + 1].second); }},
+                    0);
+    band = std::move(next);
   }
 }
 

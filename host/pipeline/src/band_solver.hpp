@@ -123,6 +123,8 @@ class BandSolver {
   // rpca's bands: each ends at an end of the runs of rows it decomposes together (rpca_row_runs),
   // as near the plan's height as they allow.
   std::vector<int> rpca_band_ends() const;
+  // Rows [y0, y0 + rows) of the region, the frames' settings and the response applied.
+  ImageStack read_band(int y0, int rows);
   void for_each_band(int begin, int end, const BandVisit& visit);
   // Adds a band's object and background samples to the threshold's (and the
   // stack's source of it, at the first band).

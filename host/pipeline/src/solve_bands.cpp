@@ -46,8 +46,13 @@ constexpr std::array kTileMethods = {"l2", "robust", "monotonic", "l1", "sbl"};
 }  // namespace
 
 nlohmann::json BandPlan::to_json() const {
-  return {{"whole_bytes", whole_bytes},   {"fixed_bytes", fixed_bytes}, {"row_bytes", row_bytes},
-          {"report_bytes", report_bytes}, {"band_rows", band_rows},     {"bands", bands}};
+  return {{"whole_bytes", whole_bytes},
+          {"fixed_bytes", fixed_bytes},
+          {"row_bytes", row_bytes},
+          {"read_ahead_row_bytes", read_ahead_row_bytes},
+          {"report_bytes", report_bytes},
+          {"band_rows", band_rows},
+          {"bands", bands}};
 }
 
 BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit, int coefficient_terms,
@@ -65,6 +70,7 @@ BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit, int
   plan.limit_bytes = memory_limit;
   // A refit band holds its coefficients three times: the solver's, read back from the spill, and refitted.
   const auto coefficients = static_cast<std::size_t>(std::max(coefficient_terms, 0)) * sizeof(float) * 3;
+  plan.read_ahead_row_bytes = decoded;
   plan.row_bytes = decoded + width * (kObservationBytes * images + kPixelBytes + kMapBytes + coefficients);
   // The program and what is held for the whole image; the output maps go to their files band by band.
   plan.fixed_bytes = kProcessBytes + pixels * kHeldBytes + working_bytes;
@@ -84,13 +90,14 @@ BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit, int
   report::ReportOptions banded_report;
   banded_report.kept_map_bytes = 0;
   plan.report_bytes = kProcessBytes + report::report_memory_bytes(size.width, size.height, banded_report);
-  if (memory_limit < plan.fixed_bytes + plan.row_bytes)
+  const std::size_t band_row_bytes = plan.row_bytes + plan.read_ahead_row_bytes;
+  if (memory_limit < plan.fixed_bytes + band_row_bytes)
     fail(
         "--memory-limit {}: too small for this stack ({}x{}, {} images): what is held for the whole image "
         "takes {} and a band of one row {} more",
         describe_bytes(memory_limit), size.width, size.height, images, describe_bytes(plan.fixed_bytes),
-        describe_bytes(plan.row_bytes));
-  plan.band_rows = static_cast<int>(std::min<std::size_t>((memory_limit - plan.fixed_bytes) / plan.row_bytes,
+        describe_bytes(band_row_bytes));
+  plan.band_rows = static_cast<int>(std::min<std::size_t>((memory_limit - plan.fixed_bytes) / band_row_bytes,
                                                           static_cast<std::size_t>(size.height)));
   plan.bands = (size.height + plan.band_rows - 1) / plan.band_rows;
   return plan;

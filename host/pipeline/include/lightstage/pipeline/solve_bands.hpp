@@ -38,9 +38,11 @@ namespace lightstage::pipeline {
 // What solving a stack costs, estimated from its headers (an upper bound:
 // every pixel counted as inside the mask).
 struct BandPlan {
-  std::size_t whole_bytes = 0;   // the whole image solved at once
-  std::size_t fixed_bytes = 0;   // held whatever the band height: the masks, the errors against ground truth
-  std::size_t row_bytes = 0;     // per row of a band: decoded images, observations, the band's maps
+  std::size_t whole_bytes = 0;  // the whole image solved at once
+  std::size_t fixed_bytes = 0;  // held whatever the band height: the masks, the errors against ground truth
+  std::size_t row_bytes = 0;    // per row of a band: decoded images, observations, the band's maps
+  // Per row of a band, beside row_bytes, in bands: the next band's images, decoded while one is solved.
+  std::size_t read_ahead_row_bytes = 0;
   std::size_t report_bytes = 0;  // the report after the solve (report::report_memory_bytes)
   std::size_t limit_bytes = 0;   // the --memory-limit planned for
   int band_rows = 0;             // rows per band (the image's height: one band, solved whole)
