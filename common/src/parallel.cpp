@@ -7,6 +7,7 @@
 #include <condition_variable>
 #include <exception>
 #include <mutex>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -119,7 +120,7 @@ void help_open_jobs() {
 void run_workers(std::size_t count, const std::function<void(std::size_t)>& worker) {
   const bool outermost = !inside_parallel_work;
   std::vector<std::thread> threads;
-  // Reserved before the threads are counted busy: below, only a thread's start can throw.
+  // Reserved before the threads are counted busy: below, only a thread's start can fail.
   threads.reserve(count - 1);
   const auto helpers = static_cast<std::size_t>(reserve_helpers(static_cast<int>(count) - 1));
   inside_parallel_work = true;
@@ -137,20 +138,38 @@ void run_workers(std::size_t count, const std::function<void(std::size_t)>& work
     open_jobs.push_back(&job);
     job_changed.notify_all();
   }
+  std::size_t started = 0;
   for (std::size_t h = 1; h <= helpers; ++h) {
     count_helper(+1);
-    threads.emplace_back([&job, h] {
-      inside_parallel_work = true;
-      current_root = job.root;
-      run_claimed(job, h);
-      help_open_jobs();
+    try {
+      threads.emplace_back([&job, h] {
+        inside_parallel_work = true;
+        current_root = job.root;
+        run_claimed(job, h);
+        help_open_jobs();
+        count_helper(-1);
+        --busy_threads;
+        const std::lock_guard lock(job_mutex);
+        if (--job.running == 0) job_changed.notify_all();
+      });
+    } catch (const std::system_error&) {
+      // The system has no thread to give: this helper's worker and the rest run on the threads that are.
       count_helper(-1);
-      --busy_threads;
-      const std::lock_guard lock(job_mutex);
-      if (--job.running == 0) job_changed.notify_all();
-    });
+      break;
+    }
+    started = h;
+  }
+  if (started < helpers) {
+    busy_threads -= static_cast<int>(helpers - started);
+    const std::lock_guard lock(job_mutex);
+    job.running -= static_cast<int>(helpers - started);  // their workers stay counted until run below
   }
   run_claimed(job, 0);
+  for (std::size_t w = started + 1; w <= helpers; ++w) {
+    worker(w);
+    const std::lock_guard lock(job_mutex);
+    --job.running;
+  }
   {
     std::unique_lock lock(job_mutex);
     for (;;) {

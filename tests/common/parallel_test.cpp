@@ -113,8 +113,9 @@ TEST(ParallelPeakThreads, NestedWorkTakesOnlyTheFreeThreadsOfTheLimit) {
 
 TEST(ParallelPeakThreads, AThreadWhoseWorkIsDoneJoinsANestedCallOfTheSameCommand) {
   // Two tasks on a limit of two: the second's inner call starts while both threads are busy, so it
-  // starts on its own thread alone. The first task's thread, once free, must take its other index (its
-  // indices wait for each other): as the caller waiting for its call (task order 0) or as its helper.
+  // starts on its own thread alone. The first task's thread, once free, must take its other index: as
+  // the caller waiting for its call (task order 0) or as its helper. The inner indices wait for each
+  // other, which the contract forbids; meet's time limit keeps a failure a failure, not a hang.
   const ThreadLimit limit(2);
   for (const bool first_on_caller : {true, false}) {
     SCOPED_TRACE(first_on_caller ? "the quick task on the caller's thread" : "the quick task on a helper");

@@ -206,6 +206,42 @@ TEST(SolveBands, L2ReadsTheStackOnceAndAMethodThatDropsShadowsTwice) {
   }
 }
 
+// The next band is decoded while one is solved where two bands' frames fit; where a band's row fits but
+// not the next one's beside it, the bands are read one after the other (not refused), to the same result.
+TEST(SolveBands, TheNextBandIsReadAheadWhereTwoBandsFramesFit) {
+  const fs::path dir = lightstage::testing::scratch_dir();
+  const fs::path stack = simulated(dir / "stack", "sphere");
+  const io::StackOutline outline = io::read_stack_outline(stack);
+  SolveSettings settings = settings_for("l2", "auto");
+  const auto plan = [&](std::size_t limit) {
+    return plan_bands(outline, limit, coefficient_terms(settings.method),
+                      solver_working_bytes(settings, outline.images));
+  };
+  const BandPlan whole = plan(std::numeric_limits<std::size_t>::max());
+  EXPECT_FALSE(whole.read_ahead);
+  ASSERT_GT(whole.read_ahead_row_bytes, 0u);
+  const BandPlan ahead = plan(whole.fixed_bytes + 5 * (whole.row_bytes + whole.read_ahead_row_bytes));
+  EXPECT_TRUE(ahead.read_ahead);
+  EXPECT_EQ(ahead.band_rows, 5);
+  const std::size_t one_row = whole.fixed_bytes + whole.row_bytes + whole.read_ahead_row_bytes - 1;
+  const BandPlan serial = plan(one_row);
+  EXPECT_FALSE(serial.read_ahead);
+  EXPECT_EQ(serial.band_rows, 1);
+  EXPECT_EQ(serial.bands, outline.size.height);
+  EXPECT_THAT(error_of([&] { plan(whole.fixed_bytes + whole.row_bytes - 1); }), HasSubstr("--memory-limit"));
+
+  const SolveReport full = solve_folder(stack, settings, dir / "whole");
+  settings.memory_limit = std::to_string(one_row);
+  const SolveReport banded = solve_folder(stack, settings, dir / "serial");
+  EXPECT_EQ(banded.summary["bands"]["read_ahead"], false);
+  EXPECT_EQ(banded.summary["bands"]["bands"], outline.size.height);
+  EXPECT_EQ(banded.summary["pixels_solved"], full.summary["pixels_solved"]);
+  expect_same_map(io::read_exr(dir / "serial" / "normal.exr", {"R", "G", "B"}),
+                  io::read_exr(dir / "whole" / "normal.exr", {"R", "G", "B"}), "normals");
+  for (const char* file : {"albedo.pfm", "residual.pfm", "confidence.pfm"})
+    expect_same_map(io::read_pfm(dir / "serial" / file), io::read_pfm(dir / "whole" / file), file);
+}
+
 // rpca decomposes blocks of pixels together: cut from runs of whole rows, which the bands keep whole.
 TEST(SolveBands, RpcaDecomposesTheWholeImagesBlocksInBands) {
   const fs::path dir = lightstage::testing::scratch_dir();

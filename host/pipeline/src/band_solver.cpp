@@ -150,12 +150,15 @@ BandSolver::BandSolver(const std::filesystem::path& input, const SolveSettings& 
     int highest = 0;
     for (std::size_t b = 0; b < band_ends_.size(); ++b)
       highest = std::max(highest, band_ends_[b] - (b == 0 ? 0 : band_ends_[b - 1]));
-    if (highest > plan_.band_rows)
+    if (highest > plan_.band_rows) {
       logger("host")->warn(
           "{}: rpca decomposes {} rows together, more than the {} rows --memory-limit allows", input.string(),
           highest, plan_.band_rows);
+      plan_.read_ahead = false;  // over the limit already: one band's frames at a time
+    }
     plan_.band_rows = highest;
     plan_.bands = static_cast<int>(band_ends_.size());
+    plan_.read_ahead = plan_.read_ahead && plan_.bands > 1;
   }
 }
 
@@ -217,13 +220,14 @@ void BandSolver::for_each_band(int begin, int end, const BandVisit& visit) {
       visit(part, observations, y0 + top);
     }
   };
-  // The next band is read while this one is solved (the plan holds two bands' frames): the threads
-  // one leaves idle, at its serial steps or its last rows, decode the other's.
+  // The next band is read while this one is solved, where the plan holds two bands' frames: the
+  // threads one leaves idle, at its serial steps or its last rows, decode the other's.
   ImageStack band = bands.empty() ? ImageStack{} : read_band(bands.front().first, bands.front().second);
   for (std::size_t k = 0; k < bands.size(); ++k) {
-    if (k + 1 == bands.size()) {
+    if (k + 1 == bands.size() || !plan_.read_ahead) {
       solve(band, bands[k].first, bands[k].second);
-      break;
+      if (k + 1 < bands.size()) band = read_band(bands[k + 1].first, bands[k + 1].second);
+      continue;
     }
     ImageStack next;
     parallel_invoke({[&] { solve(band, bands[k].first, bands[k].second); },

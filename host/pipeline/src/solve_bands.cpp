@@ -46,13 +46,10 @@ constexpr std::array kTileMethods = {"l2", "robust", "monotonic", "l1", "sbl"};
 }  // namespace
 
 nlohmann::json BandPlan::to_json() const {
-  return {{"whole_bytes", whole_bytes},
-          {"fixed_bytes", fixed_bytes},
-          {"row_bytes", row_bytes},
-          {"read_ahead_row_bytes", read_ahead_row_bytes},
-          {"report_bytes", report_bytes},
-          {"band_rows", band_rows},
-          {"bands", bands}};
+  return {{"whole_bytes", whole_bytes}, {"fixed_bytes", fixed_bytes},
+          {"row_bytes", row_bytes},     {"read_ahead_row_bytes", read_ahead_row_bytes},
+          {"read_ahead", read_ahead},   {"report_bytes", report_bytes},
+          {"band_rows", band_rows},     {"bands", bands}};
 }
 
 BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit, int coefficient_terms,
@@ -90,16 +87,20 @@ BandPlan plan_bands(const io::StackOutline& stack, std::size_t memory_limit, int
   report::ReportOptions banded_report;
   banded_report.kept_map_bytes = 0;
   plan.report_bytes = kProcessBytes + report::report_memory_bytes(size.width, size.height, banded_report);
-  const std::size_t band_row_bytes = plan.row_bytes + plan.read_ahead_row_bytes;
-  if (memory_limit < plan.fixed_bytes + band_row_bytes)
+  if (memory_limit < plan.fixed_bytes + plan.row_bytes)
     fail(
         "--memory-limit {}: too small for this stack ({}x{}, {} images): what is held for the whole image "
         "takes {} and a band of one row {} more",
         describe_bytes(memory_limit), size.width, size.height, images, describe_bytes(plan.fixed_bytes),
-        describe_bytes(band_row_bytes));
-  plan.band_rows = static_cast<int>(std::min<std::size_t>((memory_limit - plan.fixed_bytes) / band_row_bytes,
-                                                          static_cast<std::size_t>(size.height)));
+        describe_bytes(plan.row_bytes));
+  // The next band read while one is solved, where a band of a row and the next one's row fit; else the
+  // bands are read one after the other.
+  const std::size_t room = memory_limit - plan.fixed_bytes;
+  const std::size_t ahead_rows = room / (plan.row_bytes + plan.read_ahead_row_bytes);
+  const std::size_t rows = ahead_rows > 0 ? ahead_rows : room / plan.row_bytes;
+  plan.band_rows = static_cast<int>(std::min<std::size_t>(rows, static_cast<std::size_t>(size.height)));
   plan.bands = (size.height + plan.band_rows - 1) / plan.band_rows;
+  plan.read_ahead = ahead_rows > 0 && plan.bands > 1;
   return plan;
 }
 

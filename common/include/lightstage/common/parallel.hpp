@@ -7,12 +7,21 @@
 // - parallel_for: indices handed out one at a time, for work whose cost varies
 //   by index (image rows); results must not depend on which thread ran which
 //   index. parallel_invoke hands out different tasks the same way.
-// A call made from inside another's work (nested) runs on the threads of the
-// limit (resolve_threads(0)) that no work is running on at its start, and on
-// its caller's alone when none is free: work may nest without the process
+// A call made from inside another's work (nested) starts on the threads of
+// the limit (resolve_threads(0)) that no work is running on at its start, and
+// on its caller's alone when none is free: work may nest without the process
 // ever running more threads at once than the limit, or than the outermost
-// call asked for if that is more. Nested work must therefore not wait for
-// work of the same call to start (it may run after it, on the same thread).
+// call asked for if that is more. A thread that runs out of work (a helper
+// whose share is done, a caller waiting for its helpers) then takes workers
+// not yet started of any call under the same outermost call, so work that
+// nests unevenly still keeps every thread busy; work of another outermost
+// call (another thread's command) is never taken. Hence:
+// - nested work must not wait for work of the same call to start (it may run
+//   after it, on the same thread);
+// - a body must not hold a lock, or thread-local scratch it is using, across a
+//   parallel call: while the call waits, its thread may run other work of the
+//   same command, that body's again included;
+// - a call returns once its helpers are done with the other work they took.
 
 #include <cstddef>
 #include <functional>
@@ -51,7 +60,8 @@ int parallel_peak_threads();
 void reset_parallel_peak_threads();
 
 // Calls body(chunk, begin, end) for `chunks` contiguous, in-order ranges that
-// cover [0, count), each on its own thread (nested: as many as are free). Returns the number of chunks used
+// cover [0, count), each on its own thread as far as threads are free (the
+// rest on whichever comes free first). Returns the number of chunks used
 // (<= resolved threads, >= 1; one empty chunk when count is 0). Every chunk
 // runs to its end; an exception from a body is rethrown on the caller's thread
 // once all have finished (the first one, by chunk order).

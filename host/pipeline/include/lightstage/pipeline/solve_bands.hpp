@@ -13,7 +13,8 @@
 //     the stack is read once);
 //   the incidence fall-off κ of the bi-polynomial methods and auto
 //     (incidence_falloff.hpp; not with --falloff);
-// then each band is solved; a pixel's place in the whole image
+// then each band is solved, the next band decoded beside it where the memory
+// limit holds two bands' frames (BandPlan::read_ahead); a pixel's place in the whole image
 // (Observations::origin, first_pixel) gives its near lights and its random
 // seed. The bi-polynomial methods and auto refit their coefficients for
 // relighting over the whole object (reflectance/relighting_fit.hpp): their
@@ -41,12 +42,14 @@ struct BandPlan {
   std::size_t whole_bytes = 0;  // the whole image solved at once
   std::size_t fixed_bytes = 0;  // held whatever the band height: the masks, the errors against ground truth
   std::size_t row_bytes = 0;    // per row of a band: decoded images, observations, the band's maps
-  // Per row of a band, beside row_bytes, in bands: the next band's images, decoded while one is solved.
+  // Per row of a band, beside row_bytes, to decode the next band's images while one is solved.
   std::size_t read_ahead_row_bytes = 0;
   std::size_t report_bytes = 0;  // the report after the solve (report::report_memory_bytes)
   std::size_t limit_bytes = 0;   // the --memory-limit planned for
   int band_rows = 0;             // rows per band (the image's height: one band, solved whole)
   int bands = 1;
+  // The next band is read while one is solved: in bands, where a band of a row and the next one's row fit.
+  bool read_ahead = false;
 
   nlohmann::json to_json() const;
 };
