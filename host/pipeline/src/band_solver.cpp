@@ -226,6 +226,7 @@ void BandSolver::for_each_band(int begin, int end, const BandVisit& visit) {
   for (std::size_t k = 0; k < bands.size(); ++k) {
     if (k + 1 == bands.size() || !plan_.read_ahead) {
       solve(band, bands[k].first, bands[k].second);
+      band = ImageStack{};  // gone before the next is read: the plan holds one band's frames
       if (k + 1 < bands.size()) band = read_band(bands[k + 1].first, bands[k + 1].second);
       continue;
     }
