@@ -221,19 +221,22 @@ void BandSolver::for_each_band(int begin, int end, const BandVisit& visit) {
     }
   };
   // The next band is read while this one is solved, where the plan holds two bands' frames: the
-  // threads one leaves idle, at its serial steps or its last rows, decode the other's.
+  // threads one leaves idle, at its serial steps or its last rows, decode the other's. Else a band's
+  // frames go before the next band's are read.
   ImageStack band = bands.empty() ? ImageStack{} : read_band(bands.front().first, bands.front().second);
   for (std::size_t k = 0; k < bands.size(); ++k) {
-    if (k + 1 == bands.size() || !plan_.read_ahead) {
-      solve(band, bands[k].first, bands[k].second);
-      band = ImageStack{};  // gone before the next is read: the plan holds one band's frames
-      if (k + 1 < bands.size()) band = read_band(bands[k + 1].first, bands[k + 1].second);
-      continue;
-    }
     ImageStack next;
-    parallel_invoke({[&] { solve(band, bands[k].first, bands[k].second); },
-                     [&] { next = read_band(bands[k + 1].first, bands[k + 1].second); }},
-                    0);
+    const auto solve_this = [&] { solve(band, bands[k].first, bands[k].second); };
+    const auto read_next = [&] {
+      if (k + 1 < bands.size()) next = read_band(bands[k + 1].first, bands[k + 1].second);
+    };
+    if (plan_.read_ahead) {
+      parallel_invoke({solve_this, read_next}, 0);
+    } else {
+      solve_this();
+      band = ImageStack{};
+      read_next();
+    }
     band = std::move(next);
   }
 }
